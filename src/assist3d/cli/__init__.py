@@ -1,0 +1,71 @@
+"""The ``assist3d`` command line. Each area registers its commands from its own module."""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+
+import typer
+
+from ..errors import AssistError
+
+app = typer.Typer(
+    name="assist3d",
+    help="Synthesise fully annotated indoor scenes for class-agnostic 3D instance segmentation.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+
+@app.callback()
+def _root(
+    verbose: int = typer.Option(0, "--verbose", "-v", count=True, help="More log output (-v info, -vv debug)."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Only warnings and errors."),
+) -> None:
+    """assist3d: assets, layouts, rendered point clouds, training and evaluation."""
+    setup_logging(logging.WARNING if quiet else (logging.DEBUG if verbose >= 2 else logging.INFO))
+
+
+def setup_logging(level: int = logging.INFO) -> None:
+    """Attach one rich handler to the package logger (the library itself never configures logging)."""
+    from rich.console import Console
+    from rich.logging import RichHandler
+
+    logger = logging.getLogger("assist3d")
+    logger.setLevel(level)
+    for h in list(logger.handlers):
+        logger.removeHandler(h)
+    handler = RichHandler(console=Console(stderr=True), show_path=False, show_time=False, markup=False)
+    handler.setFormatter(logging.Formatter("%(message)s"))
+    logger.addHandler(handler)
+    logger.propagate = False
+
+
+def _register_all() -> None:
+    from . import assets as _assets
+    from . import scene as _scene
+    from . import generate as _generate
+    from . import evaluate as _evaluate
+    from . import metrics as _metrics
+    from . import train as _train
+
+    for mod in (_assets, _scene, _generate, _evaluate, _metrics, _train):
+        mod.register(app)
+
+
+_register_all()
+
+
+def main() -> None:
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    try:
+        app()
+    except AssistError as e:
+        logging.getLogger("assist3d").error(str(e))
+        sys.exit(2)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

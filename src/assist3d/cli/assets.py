@@ -1,0 +1,7 @@
+"""CLI commands: assets (being written)."""
+
+import typer
+
+
+def register(app: typer.Typer) -> None:
+    pass

@@ -1,0 +1,7 @@
+"""CLI commands: metrics (being written)."""
+
+import typer
+
+
+def register(app: typer.Typer) -> None:
+    pass

@@ -1,0 +1,231 @@
+"""Typed configuration, loadable from YAML. Every field states its paper default (if any).
+
+One section per pipeline stage. ``GenerateConfig`` composes them; ``load_config`` reads a YAML
+file (unknown keys are an error that lists close matches), and ``dump_config`` writes the resolved
+copy next to the outputs.
+"""
+
+from __future__ import annotations
+
+import difflib
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from .errors import ConfigError
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+
+
+class AssetsConfig(_Section):
+    """Where assets come from."""
+
+    library: str | None = Field(None, description="Catalog folder; None = $ASSIST3D_ASSETS or the default cache folder, "
+                                                  "falling back to the built-in procedural library.")
+    procedural_count: int = Field(2000, ge=1, description="Assets in the built-in procedural library when it is built "
+                                                          "on the fly (paper: ~50,000 Objaverse models; n/a).")
+    procedural_seed: int = Field(0, description="Seed of the built-in procedural library.")
+
+
+class RoomConfig(_Section):
+    """Room shell sampling (ScanNet-like rooms)."""
+
+    area_min: float = Field(10.0, gt=0, description="Smallest floor area, m^2 (ScanNet rooms: ~10-60 m^2).")
+    area_max: float = Field(60.0, gt=0, description="Largest floor area, m^2.")
+    aspect_max: float = Field(2.0, ge=1, description="Largest ratio of the long to the short side.")
+    height_min: float = Field(2.4, gt=0, description="Lowest wall height, m (ScanNet: 2.4-3.2 m).")
+    height_max: float = Field(3.2, gt=0, description="Highest wall height, m.")
+    l_shape_prob: float = Field(0.3, ge=0, le=1, description="Probability of an L-shaped footprint.")
+    doors: tuple[int, int] = Field((1, 2), description="Inclusive range of door openings per room.")
+    windows: tuple[int, int] = Field((0, 3), description="Inclusive range of window openings per room.")
+    ceiling: bool = Field(False, description="Build a ceiling (real scans rarely capture it; off by default).")
+
+
+class SelectionConfig(_Section):
+    """Heterogeneous object selection (paper section 'Heterogeneous Object Selection')."""
+
+    floor_count: int = Field(100, ge=0, description="M1: floor objects sampled per scene (paper: 100).")
+    wall_count: int = Field(50, ge=0, description="M2: wall objects sampled per scene (paper: 50).")
+    on_top_count: int = Field(5, ge=0, description="K: on-top objects sampled per floor/wall object (paper: 5).")
+    real_class_prob: float = Field(0.7, ge=0, le=1, description="p: probability a draw is restricted to the target "
+                                                                 "real dataset's classes in complementary scenes "
+                                                                 "(paper: 0.7).")
+    complementary_fraction: float = Field(0.5, ge=0, le=1, description="Fraction of scenes using the complementary "
+                                                                        "strategy; they alternate (paper: half).")
+    real_classes: str = Field("scannet18", description="Target class list: 'scannet18', 'scannet200' or a path to a "
+                                                        "text file with one class per line.")
+    pairing_prob: float = Field(0.0, ge=0, le=1, description="q: probability to co-select a class's partner class "
+                                                              "(context ablation; paper levels 1.0/0.66/0.33/0; "
+                                                              "ASSIST-3D: 0).")
+    clusters: list[int] | None = Field(None, description="Restrict selection to these shape-cluster ids "
+                                                         "(geometry ablation; None = all).")
+    max_classes: int | None = Field(None, ge=1, description="Restrict selection to this many classes "
+                                                            "(scalability ablation: 100/200/400; None = all).")
+    class_pool_seed: int = Field(0, description="Seed fixing which classes survive max_classes and class pairing.")
+
+
+class LayoutConfig(_Section):
+    """Relation planning and depth-first placement (paper section 'Scene Layout Generation')."""
+
+    planner: Literal["rules", "llm", "none"] = Field("rules", description="Relation planner: rule-based (default), "
+                                                                          "an OpenAI-compatible LLM (paper: GPT-4), or "
+                                                                          "none (random baseline).")
+    cell_size: float = Field(0.15, gt=0, description="Floor grid cell, m (paper: uniform grid; 0.1-0.25).")
+    rotations: int = Field(4, ge=1, description="Yaw steps per full turn tried for each object (>= 4).")
+    wall_step: float = Field(0.1, gt=0, description="Step along walls for wall objects, m.")
+    clearance: float = Field(0.02, ge=0, description="Minimum gap between objects, m.")
+    door_clearance: float = Field(0.8, ge=0, description="Free depth kept in front of doors, m.")
+    front_clearance: float = Field(0.3, ge=0, description="An object's front must be this far from walls, m.")
+    group_budget_s: float = Field(1.0, gt=0, description="Time budget of the depth-first search per group, s.")
+    max_backtracks: int = Field(2000, ge=0, description="Backtracking steps per group before giving up.")
+    max_on_top_per_support: int = Field(5, ge=0, description="On-top objects placed per support at most.")
+
+
+class RenderConfig(_Section):
+    """Realistic point-cloud construction (paper section 'Realistic Point Cloud Construction')."""
+
+    backend: Literal["embree", "numpy"] = Field("embree", description="Ray-casting backend: embree (fast, default) "
+                                                                      "or numpy (slow, exact reference).")
+    vantage_points: int = Field(5, ge=1, description="Camera positions picked by farthest point sampling (paper: 5).")
+    views_per_point: int = Field(12, ge=1, description="Views per position (paper: 12 at 30-degree steps).")
+    vantage_cell: float = Field(0.1, gt=0, description="Grid cell of the mid-height plane for vantage points, m "
+                                                       "(paper: 0.1).")
+    vantage_clearance: float = Field(0.3, ge=0, description="Minimum distance of a vantage point to objects and "
+                                                            "walls, m.")
+    camera_height: float | None = Field(None, description="Camera height, m; None = mid-height of the room "
+                                                          "(paper: mid-height plane).")
+    pitch_deg: float = Field(0.0, description="Camera pitch, degrees (negative looks down).")
+    width: int = Field(640, ge=8, description="Image width, px (ScanNet depth: 640).")
+    height: int = Field(480, ge=8, description="Image height, px (ScanNet depth: 480).")
+    fx: float = Field(577.9, gt=0, description="Focal length x, px (ScanNet depth ~577.9).")
+    fy: float = Field(577.9, gt=0, description="Focal length y, px.")
+    cx: float | None = Field(None, description="Principal point x, px; None = (width - 1) / 2.")
+    cy: float | None = Field(None, description="Principal point y, px; None = (height - 1) / 2.")
+    threads: int = Field(2, ge=1, description="Ray-casting threads.")
+    voxel_size: float = Field(0.02, gt=0, description="Voxel downsampling size, m (paper: voxel downsampling; "
+                                                      "ScanNet-like 2 cm).")
+    labels: Literal["ray", "nearest"] = Field("ray", description="Instance labels from the ray hit (exact) or the "
+                                                                 "paper's nearest-object assignment.")
+    max_range: float | None = Field(None, description="Drop hits farther than this, m (sensor realism; off).")
+    depth_noise: float = Field(0.0, ge=0, description="Depth noise std at 1 m, m, growing with distance^2 "
+                                                      "(sensor realism; off).")
+    grazing_dropout_deg: float | None = Field(None, description="Drop hits seen at more than this angle from the "
+                                                                "normal, degrees (sensor realism; off).")
+    edge_dropout: float = Field(0.0, ge=0, description="Drop pixels at depth edges with a jump above this, m "
+                                                       "(sensor realism; 0 = off).")
+    color_jitter: float = Field(0.0, ge=0, description="Std of per-view brightness jitter (sensor realism; off).")
+    shading: bool = Field(True, description="Lambertian shading of colours by the view direction.")
+    point_source: Literal["render", "mesh"] = Field("render", description="Rendered RGB-D fusion (paper) or uniform "
+                                                                          "mesh sampling (ablation baseline).")
+
+
+class LLMConfig(_Section):
+    """An OpenAI-compatible chat-completions endpoint (paper: GPT-4 for relations, GPT-4o for scores)."""
+
+    base_url: str | None = Field(None, description="Endpoint base URL, e.g. https://api.openai.com/v1; None = off.")
+    model: str | None = Field(None, description="Model name (paper: gpt-4 for relations).")
+    vlm_model: str | None = Field(None, description="Vision model for layout scores (paper: gpt-4o); None = model.")
+    temperature: float = Field(0.0, ge=0, le=2, description="Sampling temperature.")
+    api_key_env: str = Field("OPENAI_API_KEY", description="Environment variable holding the API key (never stored).")
+    timeout_s: float = Field(60.0, gt=0, description="Per-request time-out, s.")
+    retries: int = Field(2, ge=0, description="Retries after a failed request, with exponential back-off.")
+    backoff_s: float = Field(1.0, ge=0, description="First back-off delay, s.")
+    max_response_bytes: int = Field(200_000, ge=1000, description="Larger answers are rejected.")
+    max_tokens: int = Field(4096, ge=16, description="max_tokens sent with each request.")
+    concurrency: int = Field(4, ge=1, description="Concurrent requests across all workers.")
+    cache_dir: str | None = Field(None, description="Response cache folder; None = <cache>/llm.")
+
+
+class OutputConfig(_Section):
+    """What the dataset writer produces."""
+
+    ply: bool = Field(False, description="Also write points.ply coloured by instance.")
+    save_mesh: bool = Field(False, description="Also write the assembled scene.glb.")
+
+
+class GenerateConfig(_Section):
+    """Everything `assist3d generate` needs."""
+
+    preset: str = Field("assist3d", description="Generator preset: assist3d, randomrooms, holodeck-style, no-context, "
+                                                "or an ablation preset.")
+    seed: int = Field(0, description="Global seed; scene k uses scene_seed(seed, k).")
+    assets: AssetsConfig = Field(default_factory=AssetsConfig)
+    room: RoomConfig = Field(default_factory=RoomConfig)
+    selection: SelectionConfig = Field(default_factory=SelectionConfig)
+    layout: LayoutConfig = Field(default_factory=LayoutConfig)
+    render: RenderConfig = Field(default_factory=RenderConfig)
+    llm: LLMConfig = Field(default_factory=LLMConfig)
+    output: OutputConfig = Field(default_factory=OutputConfig)
+
+
+def _suggest(err: ValidationError, model: type[BaseModel]) -> str:
+    lines = []
+    for e in err.errors():
+        loc = ".".join(str(p) for p in e["loc"])
+        msg = e["msg"]
+        if e["type"] == "extra_forbidden":
+            # find close matches among the fields at that level
+            target: Any = model
+            for p in e["loc"][:-1]:
+                f = target.model_fields.get(str(p)) if hasattr(target, "model_fields") else None
+                target = f.annotation if f is not None else None
+            names = list(getattr(target, "model_fields", {}).keys())
+            close = difflib.get_close_matches(str(e["loc"][-1]), names, n=1)
+            msg = "unknown key" + (f"; did you mean {close[0]!r}?" if close else f"; known keys: {', '.join(names)}")
+        lines.append(f"  {loc}: {msg}")
+    return "\n".join(lines)
+
+
+def parse_config(data: dict | None, *, source: str = "<dict>") -> GenerateConfig:
+    """Validate a plain dict into a :class:`GenerateConfig`; errors name the key and a fix."""
+    try:
+        return GenerateConfig.model_validate(data or {})
+    except ValidationError as err:
+        raise ConfigError(f"{source}: invalid configuration\n{_suggest(err, GenerateConfig)}") from None
+
+
+def load_config(path: str | Path | None, overrides: dict | None = None) -> GenerateConfig:
+    """Read a YAML config file (or defaults if ``path`` is None) and apply nested ``overrides``."""
+    import yaml
+
+    data: dict = {}
+    if path is not None:
+        p = Path(path)
+        if not p.is_file():
+            raise ConfigError(f"{p}: config file not found")
+        try:
+            loaded = yaml.safe_load(p.read_text(encoding="utf-8"))
+        except yaml.YAMLError as e:
+            raise ConfigError(f"{p}: not valid YAML ({e})") from None
+        if loaded is not None and not isinstance(loaded, dict):
+            raise ConfigError(f"{p}: expected a mapping at the top level, got {type(loaded).__name__}")
+        data = loaded or {}
+    if overrides:
+        data = _merge(data, overrides)
+    return parse_config(data, source=str(path) if path else "<defaults>")
+
+
+def _merge(base: dict, over: dict) -> dict:
+    out = dict(base)
+    for k, v in over.items():
+        if isinstance(v, dict) and isinstance(out.get(k), dict):
+            out[k] = _merge(out[k], v)
+        else:
+            out[k] = v
+    return out
+
+
+def config_to_dict(cfg: BaseModel) -> dict:
+    """A JSON-safe dict of the resolved config (secrets are never part of it)."""
+    return cfg.model_dump(mode="json")
+
+
+def dump_config(cfg: BaseModel, path: str | Path) -> None:
+    import yaml
+
+    from .fileio import write_text_atomic
+
+    write_text_atomic(path, yaml.safe_dump(config_to_dict(cfg), sort_keys=False))

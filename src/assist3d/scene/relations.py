@@ -1,0 +1,143 @@
+"""The relation vocabulary and the planner interface shared by the rule-based and LLM planners.
+
+A planner receives the objects selected for one group (the floor objects, the wall objects, or
+the on-top objects of one support) and returns them in placement order, each with relations to
+objects *earlier in that order* only. The depth-first placement search turns relations into
+poses: ``hard`` relations filter candidate placements, soft ones rank them.
+
+Group names: ``"floor"``, ``"wall"``, and ``"on:<support instance id>"`` for on-top groups.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol, Sequence
+
+import numpy as np
+
+from ..contracts import AssetRecord, PlacedInstance, Relation, Room
+
+
+@dataclass(frozen=True)
+class RelationSpec:
+    """What a relation kind means and what it needs."""
+
+    kind: str
+    needs_target: bool
+    groups: tuple[str, ...]  # which groups may use it: "floor", "wall", "on"
+    values: int  # number of numbers in Relation.value
+    description: str
+
+
+_SPECS = (
+    RelationSpec("edge", False, ("floor",), 0, "back against a wall"),
+    RelationSpec("middle", False, ("floor",), 0, "away from the walls"),
+    RelationSpec("near", True, ("floor", "wall", "on"), 0, "within about 0.5-1.5 m of the target"),
+    RelationSpec("far", True, ("floor", "wall", "on"), 0, "at least about 1.5 m from the target"),
+    RelationSpec("in_front_of", True, ("floor", "on"), 0, "in the target's front half-space"),
+    RelationSpec("behind", True, ("floor", "on"), 0, "in the target's back half-space"),
+    RelationSpec("left_of", True, ("floor", "wall", "on"), 0, "on the target's left (seen from its front)"),
+    RelationSpec("right_of", True, ("floor", "wall", "on"), 0, "on the target's right (seen from its front)"),
+    RelationSpec("side_of", True, ("floor", "wall", "on"), 0, "beside the target, left or right"),
+    RelationSpec("around", True, ("floor",), 0, "near the target and facing it (chairs around a table)"),
+    RelationSpec("center_aligned", True, ("floor", "wall", "on"), 0, "centre aligned with the target on one axis"),
+    RelationSpec("face_to", True, ("floor",), 0, "front turned towards the target"),
+    RelationSpec("face_same_as", True, ("floor", "wall", "on"), 0, "same orientation as the target"),
+    RelationSpec("height", False, ("wall",), 2, "base height above the floor within [value0, value1] m"),
+    RelationSpec("above", True, ("wall",), 0, "above a floor object (target = a floor instance id)"),
+    RelationSpec("on", True, ("on",), 0, "rests on the support (target = the support instance id)"),
+)
+
+RELATIONS: dict[str, RelationSpec] = {s.kind: s for s in _SPECS}
+
+# Relations whose target is an instance id of an already-placed object of another group rather
+# than an index into the current group's plan.
+CROSS_GROUP = frozenset({"above", "on"})
+
+
+def group_kind(group: str) -> str:
+    """'floor', 'wall' or 'on' for a group name."""
+    return "on" if group.startswith("on:") else group
+
+
+@dataclass(frozen=True)
+class PlanRequest:
+    """The objects of one group to order and relate.
+
+    ``objects`` are the selected assets (any order); ``placed`` are instances already placed in
+    the scene (floor objects when planning walls, the support when planning an on-top group);
+    ``support`` is the support instance for on-top groups.
+    """
+
+    group: str
+    objects: tuple[AssetRecord, ...]
+    room: Room
+    placed: tuple[PlacedInstance, ...] = ()
+    support: PlacedInstance | None = None
+
+
+@dataclass(frozen=True)
+class PlannedObject:
+    """``source`` indexes ``PlanRequest.objects``; relation targets index earlier PlannedObjects
+    (or, for CROSS_GROUP kinds, are instance ids)."""
+
+    source: int
+    relations: tuple[Relation, ...] = ()
+
+
+@dataclass(frozen=True)
+class GroupPlan:
+    group: str
+    order: tuple[PlannedObject, ...]
+    planner: str  # "rules" | "llm:<model>" | "none"
+    notes: tuple[str, ...] = ()  # e.g. constraints dropped and why
+    stats: dict = field(default_factory=dict)  # llm_calls, cache_hits, repairs, tokens, seconds
+
+
+class Planner(Protocol):
+    """Anything with a name and ``plan(request, rng=...) -> GroupPlan``."""
+
+    name: str
+
+    def plan(self, request: PlanRequest, *, rng: np.random.Generator) -> GroupPlan: ...
+
+
+def validate_plan(plan: GroupPlan, request: PlanRequest) -> list[str]:
+    """Problems with a plan: unknown kinds, targets that are not earlier objects, duplicates,
+    missing objects. An empty list means the plan is well-formed."""
+    problems: list[str] = []
+    seen: set[int] = set()
+    kind = group_kind(request.group)
+    placed_ids = {p.id for p in request.placed} | ({request.support.id} if request.support else set())
+    for pos, item in enumerate(plan.order):
+        if not 0 <= item.source < len(request.objects):
+            problems.append(f"position {pos}: object index {item.source} out of range")
+            continue
+        if item.source in seen:
+            problems.append(f"position {pos}: object {item.source} listed twice")
+        seen.add(item.source)
+        for r in item.relations:
+            spec = RELATIONS.get(r.kind)
+            if spec is None:
+                problems.append(f"position {pos}: unknown relation {r.kind!r}")
+                continue
+            if kind not in spec.groups:
+                problems.append(f"position {pos}: relation {r.kind!r} not allowed for {kind} objects")
+            if spec.needs_target:
+                if r.target is None:
+                    problems.append(f"position {pos}: relation {r.kind!r} needs a target")
+                elif r.kind in CROSS_GROUP:
+                    if r.target not in placed_ids:
+                        problems.append(f"position {pos}: {r.kind!r} target {r.target} is not a placed instance")
+                elif not 0 <= r.target < pos:
+                    problems.append(f"position {pos}: {r.kind!r} target {r.target} is not an earlier object")
+            if len(r.value) != spec.values:
+                problems.append(f"position {pos}: relation {r.kind!r} needs {spec.values} value(s)")
+    missing = set(range(len(request.objects))) - seen
+    if missing:
+        problems.append(f"objects never planned: {sorted(missing)}")
+    return problems
+
+
+def canonical_relation_names() -> Sequence[str]:
+    return tuple(RELATIONS)

@@ -1,0 +1,37 @@
+"""Shared fixtures: locations of real data (skipped cleanly when absent)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED = Path(os.environ.get("ASSIST3D_SHARED", ROOT.parent / "shared"))
+REAL_SCAN = SHARED / "data" / "real" / "scannet_scene0451_01.npy"
+SH3D_DIR = Path("/usr/share/sweethome3d/furniture")
+SH3D_JAR = Path("/usr/share/sweethome3d/sweethome3d.jar")
+
+
+@pytest.fixture(autouse=True)
+def _isolated_cache(tmp_path_factory, monkeypatch):
+    """Never touch the user's cache folder from a test."""
+    cache = tmp_path_factory.getbasetemp() / "assist3d-cache"
+    monkeypatch.setenv("ASSIST3D_CACHE", str(cache))
+    monkeypatch.delenv("ASSIST3D_ASSETS", raising=False)
+    monkeypatch.delenv("OPENAI_API_KEY", raising=False)
+
+
+@pytest.fixture
+def real_scan_path() -> Path:
+    if not REAL_SCAN.is_file():
+        pytest.skip(f"real scan not found at {REAL_SCAN}")
+    return REAL_SCAN
+
+
+@pytest.fixture
+def sh3d_dir() -> Path:
+    if not SH3D_DIR.is_dir() or not any(SH3D_DIR.glob("*.sh3f")):
+        pytest.skip("Sweet Home 3D furniture catalogs not installed (apt-get install sweethome3d-furniture)")
+    return SH3D_DIR
