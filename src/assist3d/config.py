@@ -62,6 +62,8 @@ class SelectionConfig(_Section):
                                                               "ASSIST-3D: 0).")
     clusters: list[int] | None = Field(None, description="Restrict selection to these shape-cluster ids "
                                                          "(geometry ablation; None = all).")
+    allowed_classes: list[str] | None = Field(None, description="Only select assets of these classes (baselines such "
+                                                                 "as holodeck-style; None = all).")
     max_classes: int | None = Field(None, ge=1, description="Restrict selection to this many classes "
                                                             "(scalability ablation: 100/200/400; None = all).")
     class_pool_seed: int = Field(0, description="Seed fixing which classes survive max_classes and class pairing.")

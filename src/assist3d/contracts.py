@@ -47,18 +47,25 @@ class SupportSurface:
     """A horizontal surface of an asset that other objects can rest on.
 
     ``height`` is metres above the asset's base (canonical frame); ``polygon`` is the usable
-    footprint in the canonical x-y plane, counter-clockwise, metres.
+    footprint in the canonical x-y plane, counter-clockwise, metres; ``clearance`` is the free
+    height above it (e.g. up to the next shelf board), ``None`` when nothing is above.
     """
 
     height: float
     polygon: tuple[tuple[float, float], ...]
+    clearance: float | None = None  # free height above the surface (shelves), None = unbounded
 
     def to_json(self) -> dict:
-        return {"height": round(float(self.height), 6), "polygon": [[round(x, 6), round(y, 6)] for x, y in self.polygon]}
+        d = {"height": round(float(self.height), 6), "polygon": [[round(x, 6), round(y, 6)] for x, y in self.polygon]}
+        if self.clearance is not None:
+            d["clearance"] = round(float(self.clearance), 6)
+        return d
 
     @staticmethod
     def from_json(d: dict) -> "SupportSurface":
-        return SupportSurface(float(d["height"]), tuple((float(x), float(y)) for x, y in d["polygon"]))
+        c = d.get("clearance")
+        return SupportSurface(float(d["height"]), tuple((float(x), float(y)) for x, y in d["polygon"]),
+                              None if c is None else float(c))
 
 
 @dataclass(frozen=True)
