@@ -1,0 +1,61 @@
+"""Generator presets: the paper's method, the baselines it compares with, and its ablations.
+
+A preset is a set of config overrides applied before the user's own config file and flags, so
+every generator shares one pipeline and one output format. ``assist3d generate --preset NAME``.
+"""
+
+from __future__ import annotations
+
+import difflib
+
+from .config import GenerateConfig, _merge, parse_config
+from .errors import ConfigError
+
+# Household classes a Holodeck-style generator (an LLM asked for a typical room) keeps choosing.
+HOUSEHOLD_CLASSES = [
+    "bed", "nightstand", "wardrobe", "dresser", "sofa", "armchair", "coffee table", "tv stand", "tv",
+    "dining table", "chair", "desk", "office chair", "bookshelf", "shelf", "cabinet", "table", "lamp",
+    "floor lamp", "table lamp", "plant", "picture", "mirror", "clock", "book", "vase", "cup", "bottle",
+    "monitor", "keyboard", "laptop", "toilet", "sink", "bathtub", "refrigerator", "counter", "stool",
+]
+
+PRESETS: dict[str, dict] = {
+    # ASSIST-3D as in the paper: random heterogeneous selection, relations + depth-first search,
+    # rendered RGB-D fusion. Half the scenes use the complementary real-class strategy.
+    "assist3d": {},
+    # RandomRooms-style: random assets, random positions and yaws, no relations, no collision
+    # reasoning beyond dropping objects on the floor (or on what lies below).
+    "randomrooms": {
+        "layout": {"planner": "none"},
+        "selection": {"floor_count": 40, "wall_count": 0, "on_top_count": 0, "complementary_fraction": 0.0},
+    },
+    # Holodeck-style: common household classes paired with their typical neighbours, few objects,
+    # relation-guided placement.
+    "holodeck-style": {
+        "selection": {"floor_count": 14, "wall_count": 4, "on_top_count": 2, "allowed_classes": HOUSEHOLD_CLASSES,
+                      "pairing_prob": 1.0, "complementary_fraction": 0.0},
+    },
+    # ASSIST-3D without context complexity: a class's partner is co-selected with probability 0.66.
+    "no-context": {"selection": {"pairing_prob": 0.66}},
+    # Ablations of the paper's tables.
+    "mesh-sampled": {"render": {"point_source": "mesh"}},
+    **{f"pairing-{q}": {"selection": {"pairing_prob": float(q)}} for q in ("1.0", "0.66", "0.33", "0")},
+    **{f"clusters-{k}": {"selection": {"clusters": list(range(k))}} for k in range(1, 6)},
+    **{f"classes-{n}": {"selection": {"max_classes": n}} for n in (100, 200, 400)},
+}
+
+
+def preset_overrides(name: str) -> dict:
+    """The config overrides of preset ``name``; an unknown name lists close matches."""
+    if name not in PRESETS:
+        close = difflib.get_close_matches(name, PRESETS, n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else f"; known presets: {', '.join(PRESETS)}"
+        raise ConfigError(f"unknown preset {name!r}{hint}")
+    return PRESETS[name]
+
+
+def apply_preset(data: dict, name: str) -> GenerateConfig:
+    """Apply preset ``name`` under the user's config dict ``data`` (the user's values win)."""
+    merged = _merge(preset_overrides(name), data or {})
+    merged["preset"] = name
+    return parse_config(merged, source=f"preset {name}")
