@@ -202,6 +202,14 @@ class Catalog:
             self._mesh_cache.pop(rec.id, None)
         return rec
 
+    def update_record(self, record: AssetRecord) -> None:
+        """Replace the metadata of an existing asset (its cached mesh is kept)."""
+        with self._lock:
+            if record.id not in self._records:
+                raise AssetError(f"{self.root}: no asset with id {record.id!r} to update")
+            self._records[record.id] = record
+            self._sorted = None
+
     def remove_source(self, source: str, prefix: str = "") -> None:
         """Forget records and skip reports of one source (optionally only ids under ``prefix``)."""
         with self._lock:
