@@ -1,0 +1,262 @@
+"""Sparse voxel tensors and 3-D convolutions in pure PyTorch (CPU and CUDA, no compiled extension).
+
+A :class:`SparseTensor` holds integer voxel coordinates ``(N, 4) int32`` (batch, x, y, z, in units of
+the tensor's own stride) and features ``(N, C)``. Neighbour lookup packs coordinates into ``int64``
+keys, sorts them once per coordinate set and finds each kernel offset's neighbours with
+``torch.searchsorted``. Convolution is gather -> matmul -> scatter (``index_add_``), one matmul per
+kernel offset.
+
+Three operators cover a U-Net:
+
+* :class:`SubMConv3d`  submanifold convolution (stride 1, odd kernel): outputs at the input sites.
+* :class:`DownConv3d`  kernel 2, stride 2: outputs at ``unique(coord // 2)``.
+* :class:`UpConv3d`    transposed kernel 2, stride 2 onto a known finer coordinate set (the skip's).
+
+Each equals the matching dense ``torch.nn.functional`` operator evaluated at the active sites
+(``tests/fast/test_model_sparse.py``). Kernel maps are cached per coordinate set in a dictionary
+shared by every tensor derived from the same input, so the 20-odd convolutions of one U-Net level
+build their neighbour map once.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import torch
+from torch import nn
+
+_BITS = 16  # bits per spatial axis in a key (65,536 voxels = 1.3 km at 2 cm)
+_MASK = (1 << _BITS) - 1
+_HALF = 1 << (_BITS - 1)
+
+
+def encode_keys(coords: torch.Tensor) -> torch.Tensor:
+    """Pack ``(N, 4)`` integer coordinates (batch, x, y, z) into ``(N,) int64`` keys.
+
+    Spatial coordinates must lie in ``[-2**15, 2**15)``; the batch index in ``[0, 2**15)``.
+    """
+    c = coords.to(torch.int64)
+    x = (c[:, 1] + _HALF) & _MASK
+    y = (c[:, 2] + _HALF) & _MASK
+    z = (c[:, 3] + _HALF) & _MASK
+    return (c[:, 0] << (3 * _BITS)) | (x << (2 * _BITS)) | (y << _BITS) | z
+
+
+def kernel_offsets(kernel_size: int, device: torch.device | str = "cpu") -> torch.Tensor:
+    """``(k**3, 3) int64`` offsets, z fastest: offset ``i`` matches dense weight ``[..., dx, dy, dz]``."""
+    if kernel_size % 2 == 1:
+        r = kernel_size // 2
+        rng = range(-r, r + 1)
+    else:
+        rng = range(kernel_size)
+    offs = list(itertools.product(rng, rng, rng))
+    return torch.tensor(offs, dtype=torch.int64, device=device)
+
+
+@dataclass
+class CoordSet:
+    """A coordinate set with its sorted keys and a cache of kernel maps built on it."""
+
+    coords: torch.Tensor  # (N, 4) int32
+    keys_sorted: torch.Tensor  # (N,) int64
+    order: torch.Tensor  # (N,) int64: keys_sorted = keys[order]
+    cache: dict[Any, Any] = field(default_factory=dict)
+
+    @classmethod
+    def build(cls, coords: torch.Tensor) -> "CoordSet":
+        keys = encode_keys(coords)
+        keys_sorted, order = torch.sort(keys)
+        return cls(coords=coords, keys_sorted=keys_sorted, order=order)
+
+    def __len__(self) -> int:
+        return int(self.coords.shape[0])
+
+    def lookup(self, query_coords: torch.Tensor) -> torch.Tensor:
+        """Row index of each query coordinate in this set, ``-1`` where absent; ``(M,) int64``."""
+        q = encode_keys(query_coords)
+        pos = torch.searchsorted(self.keys_sorted, q)
+        pos = pos.clamp(max=max(len(self) - 1, 0))
+        if len(self) == 0:
+            return torch.full_like(q, -1)
+        hit = self.keys_sorted[pos] == q
+        return torch.where(hit, self.order[pos], torch.full_like(pos, -1))
+
+    def submanifold_map(self, kernel_size: int) -> list[tuple[torch.Tensor, torch.Tensor] | None]:
+        """Per kernel offset, ``(in_rows, out_rows)`` pairs; ``None`` marks the identity (centre) offset."""
+        key = ("subm", kernel_size)
+        if key not in self.cache:
+            offs = kernel_offsets(kernel_size, self.coords.device)
+            base = self.coords.to(torch.int64)
+            maps: list[tuple[torch.Tensor, torch.Tensor] | None] = []
+            for o in offs:
+                if bool((o == 0).all()):
+                    maps.append(None)
+                    continue
+                q = base.clone()
+                q[:, 1:] += o
+                idx = self.lookup(q)
+                out_rows = torch.nonzero(idx >= 0).squeeze(1)
+                maps.append((idx[out_rows], out_rows))
+            self.cache[key] = maps
+        return self.cache[key]
+
+    def down(self) -> tuple["CoordSet", torch.Tensor, torch.Tensor]:
+        """Coarser set ``unique(coord // 2)``; parent row of every row ``(N,)`` and child octant ``(N,)``."""
+        key = ("down",)
+        if key not in self.cache:
+            c = self.coords.to(torch.int64)
+            parent = c.clone()
+            parent[:, 1:] = torch.div(c[:, 1:], 2, rounding_mode="floor")
+            octant = ((c[:, 1] - 2 * parent[:, 1]) * 4 + (c[:, 2] - 2 * parent[:, 2]) * 2
+                      + (c[:, 3] - 2 * parent[:, 3]))
+            keys = encode_keys(parent)
+            ukeys, inverse = torch.unique(keys, sorted=True, return_inverse=True)
+            first = torch.full((ukeys.shape[0],), c.shape[0], dtype=torch.int64, device=c.device)
+            first.scatter_reduce_(0, inverse, torch.arange(c.shape[0], device=c.device), reduce="amin")
+            coarse_coords = parent[first].to(torch.int32)
+            coarse = CoordSet(coords=coarse_coords, keys_sorted=ukeys,
+                              order=torch.arange(ukeys.shape[0], device=c.device))
+            self.cache[key] = (coarse, inverse, octant)
+        return self.cache[key]
+
+
+@dataclass
+class SparseTensor:
+    """Features ``(N, C)`` on a :class:`CoordSet` at integer stride ``stride`` (voxels of the input grid)."""
+
+    feats: torch.Tensor
+    cset: CoordSet
+    stride: int = 1
+
+    @property
+    def coords(self) -> torch.Tensor:
+        return self.cset.coords
+
+    def replace(self, feats: torch.Tensor) -> "SparseTensor":
+        return SparseTensor(feats=feats, cset=self.cset, stride=self.stride)
+
+
+def _init_weight(w: torch.Tensor, fan_in: int) -> None:
+    bound = 1.0 / math.sqrt(fan_in)
+    nn.init.uniform_(w, -bound, bound)
+
+
+class SubMConv3d(nn.Module):
+    """Submanifold convolution: odd ``kernel_size``, stride 1, outputs at the input sites.
+
+    Weight ``(k**3, C_in, C_out)``; equals ``F.conv3d(padding=k//2)`` on the densified grid read at the
+    active sites.
+    """
+
+    def __init__(self, in_channels: int, out_channels: int, kernel_size: int = 3, bias: bool = False):
+        super().__init__()
+        if kernel_size % 2 != 1:
+            raise ValueError(f"SubMConv3d needs an odd kernel size, got {kernel_size}")
+        self.kernel_size = kernel_size
+        self.weight = nn.Parameter(torch.empty(kernel_size ** 3, in_channels, out_channels))
+        _init_weight(self.weight, in_channels * kernel_size ** 3)
+        self.bias = nn.Parameter(torch.zeros(out_channels)) if bias else None
+
+    def forward(self, x: SparseTensor) -> SparseTensor:
+        feats = x.feats
+        maps = x.cset.submanifold_map(self.kernel_size)
+        w = self.weight.to(feats.dtype)
+        centre = maps.index(None)
+        out = feats @ w[centre]
+        for i, m in enumerate(maps):
+            if m is None or m[0].numel() == 0:
+                continue
+            in_rows, out_rows = m
+            src = feats[in_rows] @ w[i]
+            out = out.index_add(0, out_rows, src.to(out.dtype))
+        if self.bias is not None:
+            out = out + self.bias.to(out.dtype)
+        return x.replace(out)
+
+
+class DownConv3d(nn.Module):
+    """Kernel 2, stride 2 convolution; output sites ``unique(coord // 2)``. Equals ``F.conv3d(stride=2)``."""
+
+    def __init__(self, in_channels: int, out_channels: int, bias: bool = False):
+        super().__init__()
+        self.weight = nn.Parameter(torch.empty(8, in_channels, out_channels))
+        _init_weight(self.weight, in_channels * 8)
+        self.bias = nn.Parameter(torch.zeros(out_channels)) if bias else None
+
+    def forward(self, x: SparseTensor) -> SparseTensor:
+        coarse, inverse, octant = x.cset.down()
+        w = self.weight.to(x.feats.dtype)
+        # One batched matmul over the 8 octants: (N, C_in) x (C_in, C_out) per row's octant, grouped.
+        out: torch.Tensor | None = None
+        for o in range(8):
+            rows = torch.nonzero(octant == o).squeeze(1)
+            src = x.feats[rows] @ w[o]
+            if out is None:
+                out = src.new_zeros((len(coarse), w.shape[2]))
+            out = out.index_add(0, inverse[rows], src)
+        assert out is not None
+        if self.bias is not None:
+            out = out + self.bias.to(out.dtype)
+        return SparseTensor(feats=out, cset=coarse, stride=x.stride * 2)
+
+
+class UpConv3d(nn.Module):
+    """Transposed kernel 2, stride 2 convolution onto the finer coordinate set ``target``.
+
+    Every fine site has exactly one parent, so this is a per-octant gather-matmul; it equals
+    ``F.conv_transpose3d(stride=2)`` read at the fine sites.
+    """
+
+    def __init__(self, in_channels: int, out_channels: int, bias: bool = False):
+        super().__init__()
+        self.weight = nn.Parameter(torch.empty(8, in_channels, out_channels))
+        _init_weight(self.weight, in_channels)
+        self.bias = nn.Parameter(torch.zeros(out_channels)) if bias else None
+
+    def forward(self, x: SparseTensor, target: SparseTensor) -> SparseTensor:
+        coarse, inverse, octant = target.cset.down()
+        if x.cset is not coarse:
+            raise ValueError("UpConv3d: the input is not the stride-2 parent of the target coordinates")
+        w = self.weight.to(x.feats.dtype)
+        out: torch.Tensor | None = None
+        for o in range(8):
+            rows = torch.nonzero(octant == o).squeeze(1)
+            src = x.feats[inverse[rows]] @ w[o]
+            if out is None:
+                out = src.new_zeros((len(target.cset), w.shape[2]))
+            out = out.index_copy(0, rows, src)
+        assert out is not None
+        if self.bias is not None:
+            out = out + self.bias.to(out.dtype)
+        return SparseTensor(feats=out, cset=target.cset, stride=target.stride)
+
+
+class SparseBatchNorm(nn.BatchNorm1d):
+    """BatchNorm over the active sites' features."""
+
+    def forward(self, x: SparseTensor) -> SparseTensor:  # type: ignore[override]
+        return x.replace(super().forward(x.feats))
+
+
+class SparseReLU(nn.Module):
+    def forward(self, x: SparseTensor) -> SparseTensor:
+        return x.replace(torch.relu(x.feats))
+
+
+class SparseLinear(nn.Linear):
+    """A 1x1x1 convolution."""
+
+    def forward(self, x: SparseTensor) -> SparseTensor:  # type: ignore[override]
+        return x.replace(super().forward(x.feats))
+
+
+def sparse_tensor(coords: torch.Tensor, feats: torch.Tensor) -> SparseTensor:
+    """Build a stride-1 :class:`SparseTensor` from unique ``(N, 4) int32`` coordinates and ``(N, C)`` features."""
+    if coords.ndim != 2 or coords.shape[1] != 4:
+        raise ValueError(f"coords must be (N, 4) (batch, x, y, z), got {tuple(coords.shape)}")
+    if feats.shape[0] != coords.shape[0]:
+        raise ValueError(f"{feats.shape[0]} feature rows for {coords.shape[0]} coordinates")
+    return SparseTensor(feats=feats, cset=CoordSet.build(coords.to(torch.int32)))
