@@ -67,6 +67,11 @@ class SelectionConfig(_Section):
     max_classes: int | None = Field(None, ge=1, description="Restrict selection to this many classes "
                                                             "(scalability ablation: 100/200/400; None = all).")
     class_pool_seed: int = Field(0, description="Seed fixing which classes survive max_classes and class pairing.")
+    sampling: Literal["class", "asset"] = Field("class", description="'class': uniform over classes, then over "
+                                                                      "the assets of the class (a class with many "
+                                                                      "near-identical models does not dominate); "
+                                                                      "'asset': uniform over assets (paper: "
+                                                                      "uniform, unspecified).")
 
 
 class LayoutConfig(_Section):
