@@ -1,0 +1,79 @@
+"""Dataset readers: every benchmark format becomes a :class:`SceneDataset` of ``PointSample``.
+
+Open one with a spec ``FORMAT:PATH`` plus optional reader options as a URL-style query,
+``FORMAT:PATH?key=value&key=value``:
+
+==========  =============================================================  ====================
+format      PATH                                                           options
+==========  =============================================================  ====================
+scannet     folder of ScanNet v2 scene folders (or ``scans/``'s parent)     ``labels=TSV``
+scannetpp   ScanNet++ root (holding ``data/``) or ``data/``                 -
+s3dis       ``Stanford3dDataset_v1.2_Aligned_Version``, an area or a room   -
+pointcept   Pointcept scene folder, split folder or root of splits         ``segment``, ``ignore``
+assist3d    our generator's output folder                                  -
+array       one ``(N, 8)`` ``.npy`` or a folder of them                    -
+==========  =============================================================  ====================
+
+In every reader, objects are the points with ``instance >= 0``; ``instance == -1`` is void.
+"""
+
+from __future__ import annotations
+
+import difflib
+from pathlib import Path
+from typing import Callable
+from urllib.parse import parse_qsl
+
+from ..errors import ConfigError
+from .array import ArrayDataset
+from .base import SceneDataset
+from .pointcept import PointceptDataset
+from .s3dis import S3DISDataset
+from .scannet import ScanNetDataset
+from .scannetpp import ScanNetPPDataset
+
+__all__ = ["FORMATS", "SceneDataset", "open_dataset", "parse_spec"]
+
+_READERS: dict[str, tuple[Callable[..., SceneDataset], frozenset[str]]] = {
+    "scannet": (lambda p, **kw: ScanNetDataset(p, **kw), frozenset({"labels"})),
+    "scannetpp": (lambda p, **kw: ScanNetPPDataset(p, **kw), frozenset()),
+    "s3dis": (lambda p, **kw: S3DISDataset(p, **kw), frozenset()),
+    "pointcept": (lambda p, **kw: PointceptDataset(p, fmt="pointcept", **kw), frozenset({"segment", "ignore"})),
+    "assist3d": (lambda p, **kw: PointceptDataset(p, fmt="assist3d", **kw), frozenset()),
+    "array": (lambda p, **kw: ArrayDataset(p, **kw), frozenset()),
+}
+FORMATS: tuple[str, ...] = tuple(_READERS)
+
+
+def parse_spec(spec: str) -> tuple[str, Path, dict[str, str]]:
+    """Split ``FORMAT:PATH[?key=value&...]`` into (format, path, options); validate the format."""
+    if ":" not in spec:
+        raise ConfigError(f"dataset {spec!r}: expected FORMAT:PATH with FORMAT one of {', '.join(FORMATS)}")
+    fmt, rest = spec.split(":", 1)
+    fmt = fmt.strip().lower()
+    if fmt not in _READERS:
+        close = difflib.get_close_matches(fmt, FORMATS, n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else f"; expected one of {', '.join(FORMATS)}"
+        raise ConfigError(f"dataset {spec!r}: unknown format {fmt!r}{hint}")
+    path, _, query = rest.partition("?")
+    if not path:
+        raise ConfigError(f"dataset {spec!r}: empty PATH")
+    options = dict(parse_qsl(query, keep_blank_values=True, strict_parsing=False)) if query else {}
+    allowed = _READERS[fmt][1]
+    unknown = sorted(set(options) - allowed)
+    if unknown:
+        raise ConfigError(
+            f"dataset {spec!r}: unknown option(s) {unknown} for format {fmt!r}"
+            + (f"; allowed: {', '.join(sorted(allowed))}" if allowed else "; it takes none")
+        )
+    return fmt, Path(path).expanduser(), options
+
+
+def open_dataset(spec: str) -> SceneDataset:
+    """Open a dataset from ``FORMAT:PATH[?options]`` (see the module docstring).
+
+    Raises :class:`ConfigError` for a bad spec and :class:`DataError` for a missing or empty
+    dataset. Scenes load lazily, one :class:`PointSample` per ``dataset[i]`` or ``load(id)``.
+    """
+    fmt, path, options = parse_spec(spec)
+    return _READERS[fmt][0](path, **options)

@@ -1,0 +1,128 @@
+"""Pointcept-preprocessed scene folders, and our own generated datasets (format ``assist3d``).
+
+``pointcept:PATH``: PATH is one scene folder (holding ``coord.npy``), a split folder of scene
+folders, or a dataset root of split folders (``train/``, ``val/``, ...; scene ids must then be
+unique across splits). Per scene: ``coord.npy`` (N, 3), optional ``color.npy`` (N, 3) 0..255,
+``normal.npy`` (N, 3), one of ``segment.npy`` / ``segment20.npy`` / ``segment200.npy`` (N,), and
+``instance.npy`` (N,), -1 = no instance.
+
+Which instances are objects: Pointcept's ScanNet preprocessing keeps an instance id for walls and
+floors too and its evaluators skip them by semantic class. The same rule applies here: with
+``segment20.npy`` the points of classes -1, 0 (wall) and 1 (floor) are not objects; with
+``segment200.npy`` -1, 0 (wall) and 2 (floor); with a plain ``segment.npy`` only -1 instances are
+excluded. Options (``pointcept:PATH?segment=segment200&ignore=0,2``) override the file and the
+excluded classes.
+
+``assist3d:PATH`` reads our generator's output (the same layout plus ``layout.json`` and
+``meta.json`` per scene): every ``instance >= 0`` point is an object.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from ..contracts import PointSample
+from ..errors import DataError
+from .base import SceneDataset, read_npy
+
+log = logging.getLogger(__name__)
+
+SEGMENT_FILES: tuple[str, ...] = ("segment", "segment20", "segment200")
+#: Semantic classes whose instances are not objects, by segment file (Pointcept's ScanNet rule).
+DEFAULT_IGNORE: dict[str, tuple[int, ...]] = {"segment": (), "segment20": (0, 1), "segment200": (0, 2)}
+
+
+def _is_scene_dir(d: Path) -> bool:
+    return (d / "coord.npy").is_file()
+
+
+def _scene_dirs(root: Path) -> dict[str, Path]:
+    if _is_scene_dir(root):
+        return {root.name: root}
+    dirs: dict[str, Path] = {}
+    children = sorted(d for d in root.iterdir() if d.is_dir())
+    scenes = [d for d in children if _is_scene_dir(d)]
+    if scenes:
+        return {d.name: d for d in scenes}
+    for split in children:
+        for d in sorted(split.iterdir()):
+            if d.is_dir() and _is_scene_dir(d):
+                if d.name in dirs:
+                    raise DataError(f"{root}: scene {d.name!r} appears in both {dirs[d.name].parent.name}/ and {split.name}/")
+                dirs[d.name] = d
+    return dirs
+
+
+class PointceptDataset(SceneDataset):
+    """Pointcept-layout scene folders (see the module docstring)."""
+
+    def __init__(self, root: Path, *, fmt: str = "pointcept", segment: str | None = None, ignore: str | None = None) -> None:
+        root = Path(root)
+        if not root.is_dir():
+            raise DataError(f"{root}: {fmt} folder not found")
+        if segment is not None and segment not in SEGMENT_FILES:
+            raise DataError(f"{fmt}:{root}: ?segment={segment!r}; expected one of {', '.join(SEGMENT_FILES)}")
+        self._segment = segment
+        self._ignore: tuple[int, ...] | None = None
+        if ignore is not None:
+            try:
+                self._ignore = tuple(int(x) for x in ignore.split(",") if x.strip())
+            except ValueError:
+                raise DataError(f"{fmt}:{root}: ?ignore={ignore!r} must be comma-separated integers") from None
+        self._dirs = _scene_dirs(root)
+        super().__init__(root, fmt, list(self._dirs))
+
+    def _load(self, scene_id: str) -> PointSample:
+        d = self._dirs[scene_id]
+        coord = read_npy(d / "coord.npy")
+        if coord.ndim != 2 or coord.shape[1] != 3:
+            raise DataError(f"{d / 'coord.npy'}: expected shape (N, 3), got {coord.shape}")
+        n = len(coord)
+
+        def optional(name: str, shape: tuple[int, ...]) -> np.ndarray | None:
+            p = d / f"{name}.npy"
+            if not p.is_file():
+                return None
+            a = read_npy(p)
+            if a.shape != shape:
+                raise DataError(f"{p}: expected shape {shape} to match coord.npy, got {a.shape}")
+            return a
+
+        color = optional("color", (n, 3))
+        normal = optional("normal", (n, 3))
+        instance = optional("instance", (n,))
+        seg_name = self._segment or next((s for s in SEGMENT_FILES if (d / f"{s}.npy").is_file()), None)
+        segment = optional(seg_name, (n,)) if seg_name else None
+        if self._segment and segment is None:
+            raise DataError(f"{d / (self._segment + '.npy')}: file not found")
+        segment_i = np.full(n, -1, np.int32) if segment is None else np.rint(segment).astype(np.int32)
+        instance_i = np.full(n, -1, np.int32) if instance is None else np.rint(instance).astype(np.int32)
+        instance_i[instance_i < 0] = -1
+        ignore = self._ignore
+        if ignore is None:
+            ignore = DEFAULT_IGNORE.get(seg_name or "segment", ()) if self.format == "pointcept" else ()
+        if segment is not None and seg_name in ("segment20", "segment200") and self._ignore is None and self.format == "pointcept":
+            ignore = (-1, *ignore)
+        if ignore:
+            instance_i[np.isin(segment_i, np.asarray(ignore, np.int32))] = -1
+        if color is None:
+            color_u8 = np.zeros((n, 3), np.uint8)
+        elif color.dtype == np.uint8:
+            color_u8 = np.ascontiguousarray(color)
+        else:
+            c = color.astype(np.float64)
+            if c.size and c.max() <= 1.0:
+                c = c * 255.0
+            color_u8 = np.clip(np.rint(c), 0, 255).astype(np.uint8)
+        return PointSample(
+            scene_id=scene_id,
+            coord=np.ascontiguousarray(coord, dtype=np.float32),
+            color=color_u8,
+            normal=np.zeros((n, 3), np.float32) if normal is None else np.ascontiguousarray(normal, dtype=np.float32),
+            instance=instance_i,
+            segment=segment_i,
+            valid=np.ones(n, bool),
+        )
