@@ -116,6 +116,8 @@ class RenderConfig(_Section):
                                                       "ScanNet-like 2 cm).")
     labels: Literal["ray", "nearest"] = Field("ray", description="Instance labels from the ray hit (exact) or the "
                                                                  "paper's nearest-object assignment.")
+    nearest_radius: float = Field(0.05, gt=0, description="labels='nearest': points farther than this from every "
+                                                          "object surface are background, m (paper: n/a; ~5 cm).")
     max_range: float | None = Field(None, description="Drop hits farther than this, m (sensor realism; off).")
     depth_noise: float = Field(0.0, ge=0, description="Depth noise std at 1 m, m, growing with distance^2 "
                                                       "(sensor realism; off).")
@@ -144,6 +146,12 @@ class LLMConfig(_Section):
     max_tokens: int = Field(4096, ge=16, description="max_tokens sent with each request.")
     concurrency: int = Field(4, ge=1, description="Concurrent requests across all workers.")
     cache_dir: str | None = Field(None, description="Response cache folder; None = <cache>/llm.")
+    json_mode: bool = Field(True, description="Ask for response_format json_object (dropped silently when the "
+                                              "server rejects it).")
+    max_failures: int = Field(3, ge=1, description="Consecutive endpoint failures (after retries) before the LLM "
+                                                   "is skipped for the rest of the run and the rules take over.")
+    prompt_dir: str | None = Field(None, description="Folder of edited prompt templates overriding the built-in "
+                                                     "ones file by file; None = built-in.")
 
 
 class OutputConfig(_Section):

@@ -1,0 +1,157 @@
+"""The LLM relation planner: one chat completion per group, one repair round, rules as fallback.
+
+``LLMPlanner(cfg.llm, fallback=RulePlanner(...)).plan(request, rng=rng)`` returns a
+:class:`~assist3d.scene.relations.GroupPlan` that always passes ``validate_plan``:
+
+1. The group's prompt template is rendered (vocabulary, numbered objects with sizes, room,
+   placed instances, worked example) and sent; the answer is decoded with ``json.loads`` and
+   checked by :func:`assist3d.llm.schema.check_answer`.
+2. Every problem (invalid JSON, unknown relation names, unknown or later targets, duplicated or
+   missing objects, bad values) is sent back in ONE repair round.
+3. What is still wrong after the repair is dropped, each with a reason in ``GroupPlan.notes``
+   (and the log); objects the model never listed are appended in the fallback planner's order
+   with the fallback planner's relations.
+4. On any failure (HTTP error after retries, time-out, oversized answer, nothing usable after
+   the repair) the fallback planner plans the group and ``GroupPlan.planner`` is its name
+   ("rules"); otherwise it is ``"llm:<model>"``.
+
+``GroupPlan.stats``: llm_calls, cache_hits, repairs, prompt_tokens, completion_tokens, seconds
+(``llm_seconds`` holds the same number under the layout summary's name).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import Any
+
+import numpy as np
+
+from ..config import LLMConfig
+from ..contracts import Relation
+from ..errors import ConfigError, LLMError
+from ..scene.relations import CROSS_GROUP, GroupPlan, PlannedObject, Planner, PlanRequest, validate_plan
+from .cache import ResponseCache
+from .client import ChatClient, Usage
+from .prompts import render_plan_messages, render_repair_message
+from .schema import CheckedAnswer, check_answer, parse_json_text
+
+log = logging.getLogger(__name__)
+
+
+class LLMPlanner:
+    """Plans groups with an OpenAI-compatible chat model; ``fallback`` plans what it cannot."""
+
+    def __init__(self, cfg: LLMConfig, fallback: Planner, *, client: ChatClient | None = None,
+                 cache: ResponseCache | None = None) -> None:
+        if not cfg.base_url or not cfg.model:
+            raise ConfigError("the LLM planner needs llm.base_url and llm.model "
+                              "(--llm-base-url / --llm-model or the config file)")
+        self.cfg = cfg
+        self.fallback = fallback
+        self.client = client if client is not None else ChatClient(cfg, cache=cache)
+        self.name = f"llm:{cfg.model}"
+
+    # ------------------------------------------------------------------------------------------
+    def plan(self, request: PlanRequest, *, rng: np.random.Generator) -> GroupPlan:
+        usage = Usage()
+        t0 = time.monotonic()
+        repairs = 0
+        extra_notes: list[str] = []
+        if not request.objects:
+            return self._with_stats(self.fallback.plan(request, rng=rng), usage, repairs, (), t0)
+        try:
+            messages = render_plan_messages(request, self.cfg.prompt_dir)
+            first = self.client.complete(messages, usage=usage)
+            checked, problems = _check(first.content, request)
+            if problems:
+                repairs = 1
+                log.info("%s %s: %d problem(s) in the answer; asking for a repair: %s", self.name,
+                         request.group, len(problems), "; ".join(problems[:5]))
+                repair_messages = messages + [
+                    {"role": "assistant", "content": first.content},
+                    {"role": "user", "content": render_repair_message(problems, self.cfg.prompt_dir)},
+                ]
+                try:
+                    second = self.client.complete(repair_messages, usage=usage)
+                    checked2, problems2 = _check(second.content, request)
+                except LLMError as e:
+                    if checked is None:
+                        raise
+                    checked2, problems2 = None, [f"the repair request failed ({e})"]
+                if checked2 is not None:
+                    checked, problems = checked2, problems2
+                elif checked is not None:
+                    kept = f"repair answer unusable ({'; '.join(problems2[:2])}); kept the first answer"
+                    log.warning("%s %s: %s", self.name, request.group, kept)
+                    extra_notes.append(kept)
+            if checked is None:
+                raise LLMError(f"no usable answer after one repair round ({'; '.join(problems[:3])})")
+            if not checked.order:
+                raise LLMError("the answer lists none of the objects")
+        except LLMError as e:
+            reason = f"LLM failed for group {request.group}: {e}; the rule planner took over"
+            log.warning("%s", reason)
+            plan = self.fallback.plan(request, rng=rng)
+            return self._with_stats(plan, usage, repairs, (reason, *plan.notes), t0)
+
+        notes = extra_notes + [f"dropped: {p}" for p in problems if not p.startswith("objects never listed")]
+        for n in notes:
+            log.info("%s %s: %s", self.name, request.group, n)
+        order = list(checked.order)
+        if checked.missing:
+            order, extra = _append_missing(order, checked.missing, request, self.fallback, rng)
+            notes.extend(extra)
+        plan = GroupPlan(request.group, tuple(order), self.name, tuple(notes))
+        bad = validate_plan(plan, request)
+        if bad:  # cannot happen with a checked answer; keep the guarantee anyway
+            reason = f"LLM plan for group {request.group} failed validation ({'; '.join(bad[:3])}); rules took over"
+            log.error("%s", reason)
+            fb = self.fallback.plan(request, rng=rng)
+            return self._with_stats(fb, usage, repairs, (reason, *fb.notes), t0)
+        return self._with_stats(plan, usage, repairs, plan.notes, t0)
+
+    def _with_stats(self, plan: GroupPlan, usage: Usage, repairs: int, notes: tuple[str, ...],
+                    t0: float) -> GroupPlan:
+        stats: dict[str, Any] = dict(plan.stats)
+        stats.update(usage.as_dict())
+        stats["repairs"] = repairs
+        stats["seconds"] = round(time.monotonic() - t0, 4)
+        stats["llm_seconds"] = round(usage.seconds, 4)
+        return GroupPlan(plan.group, plan.order, plan.planner, tuple(notes), stats)
+
+
+def _check(content: str, request: PlanRequest) -> tuple[CheckedAnswer | None, list[str]]:
+    data, err = parse_json_text(content)
+    if err is not None:
+        return None, [err]
+    checked = check_answer(data, request)
+    if not checked.usable:
+        return None, list(checked.problems)
+    return checked, list(checked.problems)
+
+
+def _append_missing(order: list[PlannedObject], missing: tuple[int, ...], request: PlanRequest,
+                    fallback: Planner, rng: np.random.Generator) -> tuple[list[PlannedObject], list[str]]:
+    """Append ``missing`` objects in the fallback plan's order with its relations, re-targeted
+    to positions in the merged order (relations to objects not yet in it are dropped)."""
+    notes: list[str] = []
+    fb = fallback.plan(request, rng=rng)
+    fb_source = [p.source for p in fb.order]
+    pos_of = {p.source: i for i, p in enumerate(order)}
+    want = set(missing)
+    ordered = [s for s in fb_source if s in want] + sorted(want - set(fb_source))
+    for s in ordered:
+        item = next((p for p in fb.order if p.source == s), None)
+        rels: list[Relation] = []
+        for r in item.relations if item is not None else ():
+            if r.kind in CROSS_GROUP or r.target is None:
+                rels.append(r)
+                continue
+            src = fb_source[r.target] if 0 <= r.target < len(fb_source) else None
+            if src is not None and src in pos_of:
+                rels.append(Relation(r.kind, pos_of[src], r.value, r.hard))
+        pos_of[s] = len(order)
+        order.append(PlannedObject(s, tuple(rels)))
+    notes.append(f"objects {sorted(want)} missing from the answer; appended with {fb.planner} relations")
+    return order, notes

@@ -1,0 +1,190 @@
+"""The JSON answer the planner asks for, and its validation.
+
+Answer format (one object per line of the group's object list, in placement order)::
+
+    {"objects": [
+      {"index": 2, "relations": [{"relation": "edge"}]},
+      {"index": 0, "relations": [{"relation": "near", "target": 2}, {"relation": "face_to", "target": 2}]}
+    ]}
+
+``index`` is the number the prompt gave the object; ``target`` is the index of an object listed
+*earlier in the answer*, except for ``above`` / ``on`` whose target is the id of an already-placed
+instance; ``height`` takes ``"value": [min_m, max_m]``; ``"hard": true|false`` is optional.
+
+Nothing is guessed: an unknown relation name is reported, never mapped to a close one. The
+answer text is parsed with ``json.loads`` only (a Markdown code fence around it is tolerated).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass
+from typing import Any
+
+from ..contracts import Relation
+from ..scene.relations import CROSS_GROUP, RELATIONS, PlannedObject, PlanRequest, group_kind
+
+# Relations that are hard constraints unless the answer says otherwise.
+HARD_BY_DEFAULT = frozenset({"edge", "middle", "height", "on"})
+
+ANSWER_SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "required": ["objects"],
+    "properties": {
+        "objects": {
+            "type": "array",
+            "items": {
+                "type": "object",
+                "required": ["index"],
+                "properties": {
+                    "index": {"type": "integer", "minimum": 0},
+                    "relations": {
+                        "type": "array",
+                        "items": {
+                            "type": "object",
+                            "required": ["relation"],
+                            "properties": {
+                                "relation": {"type": "string", "enum": sorted(RELATIONS)},
+                                "target": {"type": "integer"},
+                                "value": {"type": "array", "items": {"type": "number"}},
+                                "hard": {"type": "boolean"},
+                            },
+                        },
+                    },
+                },
+            },
+        }
+    },
+}
+
+_FENCE = re.compile(r"^\s*```[a-zA-Z0-9_-]*\s*\n(.*?)\n\s*```\s*$", re.DOTALL)
+
+
+def parse_json_text(text: str) -> tuple[Any | None, str | None]:
+    """``(value, None)`` for a JSON text (optionally inside a Markdown code fence), or
+    ``(None, problem)``. Only ``json.loads`` / ``raw_decode`` are used; nothing is evaluated."""
+    m = _FENCE.match(text)
+    body = m.group(1) if m else text.strip()
+    try:
+        return json.loads(body), None
+    except json.JSONDecodeError as e:
+        first = body.find("{")
+        if first > 0:  # prose before the object: decode the first JSON object only
+            try:
+                value, _ = json.JSONDecoder().raw_decode(body[first:])
+                return value, None
+            except json.JSONDecodeError:
+                pass
+        return None, f"the answer is not valid JSON ({e.msg} at line {e.lineno} column {e.colno})"
+
+
+@dataclass(frozen=True)
+class CheckedAnswer:
+    """The usable part of an answer and every problem found (phrased for the model).
+
+    ``order`` holds the objects that could be used, in answer order, with relation targets
+    already converted to plan positions; offending relations and items are left out.
+    ``usable`` is False when the answer's overall shape is wrong (no ``objects`` list).
+    """
+
+    order: tuple[PlannedObject, ...]
+    problems: tuple[str, ...]
+    missing: tuple[int, ...]
+    usable: bool
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def check_answer(data: Any, request: PlanRequest) -> CheckedAnswer:
+    """Validate a decoded answer against the request; see the module docstring for the format."""
+    n = len(request.objects)
+    if isinstance(data, dict) and isinstance(data.get("objects"), list):
+        items = data["objects"]
+    elif isinstance(data, list):
+        items = data
+    else:
+        return CheckedAnswer((), ('the answer must be a JSON object {"objects": [...]}',), tuple(range(n)), False)
+    kind = group_kind(request.group)
+    placed_ids = {p.id for p in request.placed} | ({request.support.id} if request.support else set())
+    problems: list[str] = []
+    pos_of: dict[int, int] = {}  # object index -> position in the checked order
+    order: list[PlannedObject] = []
+    for k, item in enumerate(items):
+        if not isinstance(item, dict) or not _is_int(item.get("index")):
+            problems.append(f"entry {k}: expected {{\"index\": <integer>, \"relations\": [...]}}")
+            continue
+        idx = item["index"]
+        if not 0 <= idx < n:
+            problems.append(f"entry {k}: object index {idx} does not exist (valid: 0 to {n - 1})")
+            continue
+        if idx in pos_of:
+            problems.append(f"object {idx} is listed more than once; list each object exactly once")
+            continue
+        rels_in = item.get("relations", [])
+        if not isinstance(rels_in, list):
+            problems.append(f"object {idx}: 'relations' must be a list")
+            rels_in = []
+        rels: list[Relation] = []
+        for r in rels_in:
+            rel, problem = _check_relation(r, idx, kind, pos_of, placed_ids, request)
+            if problem:
+                problems.append(problem)
+            if rel is not None:
+                rels.append(rel)
+        pos_of[idx] = len(order)
+        order.append(PlannedObject(idx, tuple(rels)))
+    missing = tuple(i for i in range(n) if i not in pos_of)
+    if missing:
+        problems.append(f"objects never listed: {list(missing)}; list every object exactly once")
+    return CheckedAnswer(tuple(order), tuple(problems), missing, True)
+
+
+def _check_relation(r: Any, idx: int, kind: str, pos_of: dict[int, int], placed_ids: set[int],
+                    request: PlanRequest) -> tuple[Relation | None, str | None]:
+    if not isinstance(r, dict) or not isinstance(r.get("relation"), str):
+        return None, f"object {idx}: each relation must be {{\"relation\": <name>, ...}}, got {json.dumps(r)[:80]}"
+    name = r["relation"]
+    spec = RELATIONS.get(name)
+    if spec is None:
+        allowed = ", ".join(k for k, s in RELATIONS.items() if kind in s.groups)
+        return None, f"object {idx}: unknown relation {name!r}; use only: {allowed}"
+    if kind not in spec.groups:
+        return None, f"object {idx}: relation {name!r} is not allowed for {kind} objects"
+    hard = r.get("hard", name in HARD_BY_DEFAULT)
+    if not isinstance(hard, bool):
+        return None, f"object {idx}: 'hard' of relation {name!r} must be true or false"
+    target: int | None = None
+    if spec.needs_target:
+        t = r.get("target")
+        if not _is_int(t):
+            return None, f"object {idx}: relation {name!r} needs an integer 'target'"
+        if name in CROSS_GROUP:
+            if t not in placed_ids:
+                ids = sorted(placed_ids)
+                return None, (f"object {idx}: {name!r} target {t} is not a placed instance id "
+                              f"(placed ids: {ids if ids else 'none'})")
+            target = t
+        elif t == idx:
+            return None, f"object {idx}: relation {name!r} refers to the object itself"
+        elif t in pos_of:
+            target = pos_of[t]
+        elif 0 <= t < len(request.objects):
+            return None, (f"object {idx}: {name!r} target {t} is listed later; an object may refer only to "
+                          "objects listed before it")
+        else:
+            return None, f"object {idx}: {name!r} target {t} is not one of the objects"
+    value: tuple[float, ...] = ()
+    if spec.values:
+        v = r.get("value")
+        if (not isinstance(v, list) or len(v) != spec.values
+                or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in v)):
+            return None, f"object {idx}: relation {name!r} needs 'value': a list of {spec.values} numbers"
+        value = tuple(float(x) for x in v)
+        if name == "height" and not 0.0 <= value[0] <= value[1] <= request.room.height:
+            return None, (f"object {idx}: height range {list(value)} must satisfy 0 <= min <= max <= "
+                          f"{request.room.height:.2f} (the wall height)")
+    return Relation(name, target, value, hard), None

@@ -1,0 +1,125 @@
+"""A scripted chat-completions server on 127.0.0.1 for the LLM tests (imported by test_llm_*.py).
+
+Each request takes the next step of the script (the last step repeats): a status, an assistant
+text, an optional delay before answering (a stall), a raw body, or an endless body without a
+Content-Length. Every request's headers and JSON body are recorded.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+from dataclasses import dataclass, field
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from pathlib import Path
+
+SENTINEL = "sk-test-SENTINEL-9f1c2e7d4b"
+
+
+@dataclass
+class Step:
+    content: str = ""
+    status: int = 200
+    sleep: float = 0.0
+    raw: bytes | None = None
+    endless: bool = False  # stream bytes with no Content-Length until the client hangs up
+    reject_json_mode: bool = False  # answer 400 when response_format is present
+    headers: dict = field(default_factory=dict)
+
+
+def completion(content: str, prompt_tokens: int = 11, completion_tokens: int = 7) -> bytes:
+    return json.dumps({
+        "id": "chatcmpl-test", "object": "chat.completion", "model": "fake",
+        "choices": [{"index": 0, "message": {"role": "assistant", "content": content}, "finish_reason": "stop"}],
+        "usage": {"prompt_tokens": prompt_tokens, "completion_tokens": completion_tokens,
+                  "total_tokens": prompt_tokens + completion_tokens},
+    }).encode()
+
+
+class FakeServer:
+    def __init__(self, steps: list[Step]) -> None:
+        self.steps = list(steps)
+        self.requests: list[dict] = []
+        self.active = 0
+        self.max_active = 0
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        owner = self
+
+        class Handler(BaseHTTPRequestHandler):
+            def log_message(self, *args) -> None:  # keep test output quiet
+                pass
+
+            def do_POST(self) -> None:
+                body = self.rfile.read(int(self.headers.get("Content-Length", 0)))
+                with owner._lock:
+                    owner.requests.append({"path": self.path, "headers": dict(self.headers),
+                                           "json": json.loads(body)})
+                    step = owner.steps[min(len(owner.requests) - 1, len(owner.steps) - 1)]
+                    owner.active += 1
+                    owner.max_active = max(owner.max_active, owner.active)
+                try:
+                    owner._answer(self, step)
+                except (BrokenPipeError, ConnectionResetError):
+                    pass
+                finally:
+                    with owner._lock:
+                        owner.active -= 1
+
+        self.httpd = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+        self.httpd.daemon_threads = True
+        self.thread = threading.Thread(target=self.httpd.serve_forever, args=(0.02,), daemon=True)
+
+    def _answer(self, h: BaseHTTPRequestHandler, step: Step) -> None:
+        if step.sleep:
+            self._stop.wait(step.sleep)
+        if step.reject_json_mode and "response_format" in self.requests[-1]["json"]:
+            data = b'{"error": {"message": "response_format is not supported"}}'
+            h.send_response(400)
+            h.send_header("Content-Length", str(len(data)))
+            h.end_headers()
+            h.wfile.write(data)
+            return
+        if step.endless:
+            h.send_response(200)
+            h.send_header("Content-Type", "application/json")
+            h.send_header("Connection", "close")
+            h.end_headers()
+            chunk = b" " * 4096
+            t_end = time.monotonic() + 10
+            while time.monotonic() < t_end and not self._stop.is_set():
+                h.wfile.write(chunk)
+            return
+        data = step.raw if step.raw is not None else (completion(step.content) if step.status == 200 else
+                                                      b'{"error": {"message": "scripted failure"}}')
+        h.send_response(step.status)
+        h.send_header("Content-Type", "application/json")
+        h.send_header("Content-Length", str(len(data)))
+        for k, v in step.headers.items():
+            h.send_header(k, v)
+        h.end_headers()
+        h.wfile.write(data)
+
+    @property
+    def url(self) -> str:
+        return f"http://127.0.0.1:{self.httpd.server_address[1]}/v1"
+
+    def __enter__(self) -> "FakeServer":
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        self.httpd.shutdown()
+        self.httpd.server_close()
+
+
+def files_containing(secret: str, *folders: Path) -> list[Path]:
+    """Every file under ``folders`` whose bytes contain ``secret``."""
+    hits = []
+    for folder in folders:
+        for p in Path(folder).rglob("*"):
+            if p.is_file() and secret.encode() in p.read_bytes():
+                hits.append(p)
+    return hits
