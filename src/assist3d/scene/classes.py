@@ -132,20 +132,6 @@ class ClassList:
     classes: tuple[str, ...]
     reduction: dict = field(default_factory=dict, compare=False, hash=False)
 
-    def _direct(self, n: str, members: frozenset[str]) -> str | None:
-        for cand in (n, n[:-1] if n.endswith("s") else None):
-            if not cand:
-                continue
-            if cand in members:
-                return cand
-            c = SYNONYMS.get(cand, cand)
-            if c in members:
-                return c
-            r = self.reduction.get(c)
-            if r in members:
-                return r
-        return None
-
     def match(self, asset_class: str) -> str | None:
         """The class of this list an asset class counts as, or ``None``."""
         return _match_cached(self.name, self.classes, tuple(sorted(self.reduction.items())), asset_class)
@@ -159,12 +145,32 @@ class ClassList:
 
 @lru_cache(maxsize=65536)
 def _match_cached(name: str, classes: tuple[str, ...], reduction: tuple, asset_class: str) -> str | None:
-    cl = ClassList(name, classes, dict(reduction))
-    members = frozenset(classes)
+    members = {c: c for c in classes}
+    by_canon: dict[str, str] = {}
+    for c in classes:
+        by_canon.setdefault(canonical_class(c), c)
+    reduce = dict(reduction)
+
+    def one(n: str) -> str | None:
+        for cand in (n, n[:-1] if n.endswith("s") else ""):
+            if not cand:
+                continue
+            if cand in members:
+                return cand
+            c = canonical_class(cand)
+            if c in members:
+                return c
+            if c in by_canon:
+                return by_canon[c]
+            r = reduce.get(c)
+            if r in members:
+                return r
+        return None
+
     n = normalise_class(asset_class)
-    hit = cl._direct(n, members)
+    hit = one(n)
     if hit is None and " " in n:
-        hit = cl._direct(n.rsplit(" ", 1)[1], members)  # head noun: "dining chair" -> chair
+        hit = one(n.rsplit(" ", 1)[1])  # head noun: "dining chair" -> chair
     return hit
 
 

@@ -1,0 +1,230 @@
+"""Heterogeneous object selection (paper section "Heterogeneous Object Selection").
+
+Per scene: M1 floor assets and M2 wall assets drawn uniformly, then K on-top assets for every
+selected object that has a support surface. Two strategies alternate between scenes:
+
+* **random**: every draw is uniform over the group's pool;
+* **complementary**: each draw is restricted, with probability p (``real_class_prob``), to assets
+  whose class matches the target real dataset's class list (``real_classes``).
+
+"Uniform" is, by default, uniform over classes and then over the assets of the drawn class
+(``sampling: class``), so a class with a hundred near-identical models does not crowd out the rest;
+``sampling: asset`` draws uniformly over assets instead. Within a scene assets are drawn without
+replacement until a class (or the pool) runs out, then with replacement.
+
+Ablation controls: ``pairing_prob`` q co-selects each drawn class's partner class, ``clusters``
+keeps only some shape clusters, ``allowed_classes`` and ``max_classes`` restrict the class pool.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..assets.catalog import Catalog
+from ..config import SelectionConfig
+from ..contracts import AssetRecord
+from ..errors import ConfigError
+from ..rng import make_rng
+from .classes import ClassList, canonical_class, normalise_class, resolve_class_list
+
+log = logging.getLogger(__name__)
+
+# Typical co-occurring partners (canonical names); used in both directions unless a class has its
+# own entry. Classes with no partner here (or whose partner has no asset in the pool) are paired at
+# random with ``class_pool_seed``.
+PARTNERS: tuple[tuple[str, str], ...] = (
+    ("table", "chair"), ("dining table", "chair"), ("desk", "office chair"), ("bed", "nightstand"),
+    ("sofa", "coffee table"), ("armchair", "end table"), ("tv stand", "tv"), ("toilet", "sink"),
+    ("bathtub", "towel"), ("monitor", "keyboard"), ("keyboard", "mouse"), ("laptop", "mouse"),
+    ("counter", "stool"), ("kitchen counter", "stool"), ("bookshelf", "book"), ("shelf", "book"),
+    ("refrigerator", "kitchen cabinet"), ("stove", "range hood"), ("dresser", "mirror"),
+    ("wardrobe", "dresser"), ("piano", "bench"), ("cup", "plate"), ("bowl", "plate"), ("lamp", "nightstand"),
+    ("picture", "clock"), ("washing machine", "clothes dryer"), ("sink", "mirror"), ("plant", "potted plant"),
+    ("bottle", "cup"), ("book", "lamp"), ("pillow", "blanket"), ("trash can", "recycling bin"),
+)
+
+
+@dataclass(frozen=True)
+class Selection:
+    """The assets selected for one scene.
+
+    ``floor_on_top[i]`` are the on-top assets drawn for ``floor[i]`` (empty when it has no support
+    surface); likewise ``wall_on_top`` for ``wall``.
+    """
+
+    floor: tuple[AssetRecord, ...]
+    wall: tuple[AssetRecord, ...]
+    floor_on_top: tuple[tuple[AssetRecord, ...], ...]
+    wall_on_top: tuple[tuple[AssetRecord, ...], ...]
+    complementary: bool
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def count(self) -> int:
+        return len(self.floor) + len(self.wall) + sum(map(len, self.floor_on_top)) + sum(map(len, self.wall_on_top))
+
+
+class _Pool:
+    """The assets of one group after filtering, indexed by class."""
+
+    def __init__(self, records: tuple[AssetRecord, ...]):
+        self.records = records
+        by_class: dict[str, list[AssetRecord]] = {}
+        for r in records:
+            by_class.setdefault(r.class_name, []).append(r)
+        self.classes = tuple(sorted(by_class))
+        self.by_class = {c: tuple(v) for c, v in by_class.items()}
+
+    def __bool__(self) -> bool:
+        return bool(self.records)
+
+    def draw(self, rng: np.random.Generator, sampling: str, used: set[str]) -> AssetRecord:
+        """A class uniformly then one of its assets ('class'), or an asset uniformly ('asset');
+        assets not used yet in this scene first."""
+        if sampling == "class":
+            return self.draw_asset(self.classes[int(rng.integers(len(self.classes)))], rng, used)
+        fresh = [r for r in self.records if r.id not in used]
+        pick = fresh if fresh else self.records
+        rec = pick[int(rng.integers(len(pick)))]
+        used.add(rec.id)
+        return rec
+
+    def draw_asset(self, cls: str, rng: np.random.Generator, used: set[str]) -> AssetRecord:
+        members = self.by_class[cls]
+        fresh = [r for r in members if r.id not in used]
+        pick = fresh if fresh else members
+        rec = pick[int(rng.integers(len(pick)))]
+        used.add(rec.id)
+        return rec
+
+
+def is_complementary(scene_index: int, fraction: float) -> bool:
+    """Whether scene ``scene_index`` uses the complementary strategy: scenes alternate so that
+    exactly ``floor((i+1) f) `` of the first ``i+1`` scenes are complementary (f = 0.5: 1, 3, 5...)."""
+    i = int(scene_index)
+    return int(np.floor((i + 1) * fraction + 1e-9)) - int(np.floor(i * fraction + 1e-9)) == 1
+
+
+def _filter(records: tuple[AssetRecord, ...], cfg: SelectionConfig, catalog: Catalog) -> tuple[AssetRecord, ...]:
+    out = records
+    if cfg.allowed_classes is not None:
+        allowed = {normalise_class(c) for c in cfg.allowed_classes} | {canonical_class(c) for c in cfg.allowed_classes}
+        out = tuple(r for r in out if normalise_class(r.class_name) in allowed or canonical_class(r.class_name) in allowed)
+    if cfg.max_classes is not None:
+        classes = sorted({r.class_name for r in catalog.records})
+        if cfg.max_classes < len(classes):
+            keep_idx = make_rng(cfg.class_pool_seed, "max_classes").choice(len(classes), cfg.max_classes, replace=False)
+            keep = {classes[int(i)] for i in keep_idx}
+            out = tuple(r for r in out if r.class_name in keep)
+    if cfg.clusters is not None:
+        if not any(r.cluster is not None for r in catalog.records):
+            raise ConfigError(f"{catalog.root}: selection.clusters is set but no asset of this catalog has a "
+                              f"shape-cluster id; assign cluster ids first (the metrics stage writes them) or "
+                              f"unset selection.clusters")
+        wanted = set(cfg.clusters)
+        out = tuple(r for r in out if r.cluster in wanted)
+    return out
+
+
+def partner_map(classes: tuple[str, ...], class_pool_seed: int, key: str) -> dict[str, str]:
+    """Each class's partner within ``classes``: the hand-written :data:`PARTNERS` where the partner
+    is present, else a seeded random pairing of the remaining classes."""
+    canon: dict[str, list[str]] = {}
+    for c in classes:
+        canon.setdefault(canonical_class(c), []).append(c)
+    table: dict[str, str] = {}
+    for a, b in PARTNERS:
+        table.setdefault(a, b)
+    for a, b in PARTNERS:
+        table.setdefault(b, a)
+    out: dict[str, str] = {}
+    for c in classes:
+        p = table.get(canonical_class(c))
+        if p is not None and p in canon and canon[p][0] != c:
+            out[c] = canon[p][0]
+    rest = [c for c in classes if c not in out]
+    if len(classes) < 2:
+        return out
+    order = [rest[int(i)] for i in make_rng(class_pool_seed, "pairs", key).permutation(len(rest))]
+    for i in range(0, len(order) - 1, 2):
+        out[order[i]], out[order[i + 1]] = order[i + 1], order[i]
+    if len(order) % 2 == 1:
+        others = [c for c in classes if c != order[-1]]
+        out[order[-1]] = others[int(make_rng(class_pool_seed, "odd", key).integers(len(others)))]
+    return out
+
+
+class _Drawer:
+    """Draws from one group's pool with the scene's strategy, pairing and bookkeeping."""
+
+    def __init__(self, pool: _Pool, real: _Pool | None, cfg: SelectionConfig, complementary: bool, key: str,
+                 stats: dict):
+        self.pool, self.real, self.cfg, self.complementary, self.stats = pool, real, cfg, complementary, stats
+        self.partners = partner_map(pool.classes, cfg.class_pool_seed, key) if cfg.pairing_prob > 0 else {}
+        self.used: set[str] = set()
+
+    def draw(self, n: int, rng: np.random.Generator) -> list[AssetRecord]:
+        out: list[AssetRecord] = []
+        while len(out) < n:
+            source = self.pool
+            if self.complementary and self.real and rng.random() < self.cfg.real_class_prob:
+                source = self.real
+                self.stats["real_draws"] += 1
+            rec = source.draw(rng, self.cfg.sampling, self.used)
+            cls = rec.class_name
+            out.append(rec)
+            self.stats["draws"] += 1
+            partner = self.partners.get(cls)
+            if partner is not None and len(out) < n and rng.random() < self.cfg.pairing_prob:
+                out.append(self.pool.draw_asset(partner, rng, self.used))
+                self.stats["partner_draws"] += 1
+        return out
+
+
+def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Generator, *, scene_index: int) -> Selection:
+    """Select the assets of one scene.
+
+    Floor draws first (M1 = ``floor_count``), then wall draws (M2 = ``wall_count``), then K =
+    ``on_top_count`` on-top draws for each selected object with a support surface, in that order.
+    The same ``rng`` state gives the same selection. Raises :class:`ConfigError` when the floor pool
+    is empty after the filters while floor objects are requested.
+    """
+    complementary = is_complementary(scene_index, cfg.complementary_fraction)
+    classes: ClassList | None = resolve_class_list(cfg.real_classes) if complementary else None
+    stats = {"complementary": complementary, "draws": 0, "real_draws": 0, "partner_draws": 0}
+    pools = {g: _Pool(_filter(catalog.group(g), cfg, catalog)) for g in ("floor", "wall", "obj")}
+    if cfg.floor_count > 0 and not pools["floor"]:
+        raise ConfigError(f"{catalog.root}: no floor asset is left to select from after the selection filters "
+                          f"(allowed_classes={cfg.allowed_classes}, clusters={cfg.clusters}, "
+                          f"max_classes={cfg.max_classes}); the catalog has {len(catalog.group('floor'))} floor "
+                          f"assets in all")
+    drawers: dict[str, _Drawer] = {}
+    for g, pool in pools.items():
+        real = None
+        if classes is not None:
+            real = _Pool(tuple(r for r in pool.records if classes.match(r.class_name) is not None))
+            if pool and not real:
+                log.warning("selection: no %s asset matches the %s classes; complementary draws use the whole pool",
+                            g, classes.name)
+        drawers[g] = _Drawer(pool, real, cfg, complementary, g, stats)
+
+    warned: set[str] = set()
+
+    def group_draw(g: str, n: int) -> list[AssetRecord]:
+        if n <= 0:
+            return []
+        if not pools[g]:
+            if g not in warned:
+                warned.add(g)
+                log.warning("selection: no %s asset to select from (%d requested per draw); none selected", g, n)
+            return []
+        return drawers[g].draw(n, rng)
+
+    floor = group_draw("floor", cfg.floor_count)
+    wall = group_draw("wall", cfg.wall_count)
+    floor_on_top = tuple(tuple(group_draw("obj", cfg.on_top_count)) if r.supports else () for r in floor)
+    wall_on_top = tuple(tuple(group_draw("obj", cfg.on_top_count)) if r.supports else () for r in wall)
+    return Selection(tuple(floor), tuple(wall), floor_on_top, wall_on_top, complementary, stats)

@@ -1,0 +1,144 @@
+"""Heterogeneous object selection and class-list matching."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from assist3d.assets.catalog import Catalog
+from assist3d.config import SelectionConfig
+from assist3d.contracts import AssetRecord, SupportSurface
+from assist3d.errors import ConfigError
+from assist3d.scene.classes import canonical_class, resolve_class_list
+from assist3d.scene.selection import is_complementary, partner_map, select_objects
+
+FLOOR = ["table", "chair", "bed", "nightstand", "couch", "coffee table", "widget", "gizmo", "doohickey", "thingamajig"]
+WALL = ["picture", "clock", "sprocket"]
+OBJ = ["cup", "book", "monitor", "keyboard"]
+SUPPORTED = {"table", "nightstand", "coffee table", "gizmo"}
+
+
+def _rec(cls: str, group: str, i: int, cluster: int | None) -> AssetRecord:
+    sup = (SupportSurface(0.7, ((-0.3, -0.3), (0.3, -0.3), (0.3, 0.3), (-0.3, 0.3))),) if cls in SUPPORTED else ()
+    return AssetRecord(id=f"t:{cls}/{i}", source="test", name=cls, class_name=cls, groups=(group,),
+                       size=(0.8, 0.6, 0.7), supports=sup, cluster=cluster)
+
+
+def _catalog(tmp_path, per_class: int = 3, clusters: bool = True, widget_heavy: int = 0) -> Catalog:
+    recs = []
+    for group, names in (("floor", FLOOR), ("wall", WALL), ("obj", OBJ)):
+        for cls in names:
+            n = per_class + (widget_heavy if cls == "widget" else 0)
+            recs += [_rec(cls, group, i, (i % 3) if clusters else None) for i in range(n)]
+    return Catalog(tmp_path / "cat", recs)
+
+
+def _sel(cat, seed=0, scene_index=0, **kw):
+    return select_objects(cat, SelectionConfig(**kw), np.random.default_rng(seed), scene_index=scene_index)
+
+
+def test_counts_on_top_and_determinism(tmp_path):
+    cat = _catalog(tmp_path)
+    a = _sel(cat, floor_count=30, wall_count=7, on_top_count=4)
+    assert len(a.floor) == 30 and len(a.wall) == 7
+    assert len(a.floor_on_top) == 30 and len(a.wall_on_top) == 7
+    for rec, items in zip(a.floor, a.floor_on_top):
+        assert len(items) == (4 if rec.supports else 0)
+        assert all("obj" in r.groups for r in items)
+    assert all("floor" in r.groups for r in a.floor) and all("wall" in r.groups for r in a.wall)
+    b = _sel(cat, floor_count=30, wall_count=7, on_top_count=4)
+    assert [r.id for r in a.floor] == [r.id for r in b.floor]
+    assert [[r.id for r in t] for t in a.floor_on_top] == [[r.id for r in t] for t in b.floor_on_top]
+    c = _sel(cat, seed=1, floor_count=30, wall_count=7, on_top_count=4)
+    assert [r.id for r in a.floor] != [r.id for r in c.floor]
+    # without replacement while a class lasts: a class drawn n times uses min(n, 3) distinct assets
+    for cls in {r.class_name for r in a.floor}:
+        ids = [r.id for r in a.floor if r.class_name == cls]
+        assert len(set(ids)) == min(len(ids), 3)
+    d = _sel(cat, floor_count=30, wall_count=0, sampling="asset")
+    assert len({r.id for r in d.floor}) == 30  # 30 draws from 30 floor assets are all distinct
+
+
+def test_class_uniform_vs_asset_uniform(tmp_path):
+    cat = _catalog(tmp_path, per_class=2, widget_heavy=200)  # 'widget' has 202 of 220 floor assets
+    by_class = [r.class_name for s in range(20) for r in _sel(cat, seed=s, floor_count=50, wall_count=0).floor]
+    share = by_class.count("widget") / len(by_class)
+    assert 0.05 < share < 0.17  # one class in ten
+    by_asset = [r.class_name for s in range(20)
+                for r in _sel(cat, seed=s, floor_count=50, wall_count=0, sampling="asset").floor]
+    assert by_asset.count("widget") / len(by_asset) > 0.8
+
+
+def test_complementary_alternation_and_real_class_rate(tmp_path):
+    assert [is_complementary(i, 0.5) for i in range(6)] == [False, True, False, True, False, True]
+    assert not any(is_complementary(i, 0.0) for i in range(10))
+    assert all(is_complementary(i, 1.0) for i in range(10))
+    assert sum(is_complementary(i, 0.3) for i in range(100)) == 30
+    cat = _catalog(tmp_path)
+    real = resolve_class_list("scannet18")
+    n_real = sum(real.match(c) is not None for c in FLOOR)  # table chair bed nightstand couch coffee table
+    assert n_real == 6
+    p = 0.7
+    comp = _sel(cat, scene_index=1, floor_count=4000, wall_count=0, on_top_count=0, real_class_prob=p)
+    assert comp.complementary and not _sel(cat, scene_index=0, floor_count=1, wall_count=0).complementary
+    rate = np.mean([real.match(r.class_name) is not None for r in comp.floor])
+    expected = p + (1 - p) * n_real / len(FLOOR)
+    assert abs(rate - expected) < 0.03
+    assert abs(comp.stats["real_draws"] / comp.stats["draws"] - p) < 0.03
+    plain = _sel(cat, scene_index=0, floor_count=4000, wall_count=0, real_class_prob=p)
+    assert abs(np.mean([real.match(r.class_name) is not None for r in plain.floor]) - n_real / len(FLOOR)) < 0.03
+
+
+def test_pairing_probability(tmp_path):
+    cat = _catalog(tmp_path)
+    partners = partner_map(tuple(sorted(FLOOR)), 0, "floor")
+    assert partners["table"] == "chair" and partners["bed"] == "nightstand" and partners["couch"] == "coffee table"
+    assert all(partners[c] != c for c in FLOOR)
+
+    def pair_rate(q: float) -> float:
+        hits = 0
+        for s in range(300):
+            f = _sel(cat, seed=s, floor_count=2, wall_count=0, on_top_count=0, pairing_prob=q).floor
+            hits += f[1].class_name == partners[f[0].class_name]
+        return hits / 300
+
+    assert pair_rate(1.0) == 1.0
+    assert abs(pair_rate(0.0) - 1 / len(FLOOR)) < 0.05  # independent draws
+    assert 0.45 < pair_rate(0.5) < 0.65  # q + (1 - q) / C = 0.55
+
+
+def test_filters_and_errors(tmp_path):
+    cat = _catalog(tmp_path)
+    sel = _sel(cat, floor_count=40, wall_count=5, clusters=[1])
+    assert {r.cluster for r in sel.floor + sel.wall} == {1}
+    assert all(r.cluster == 1 for items in sel.floor_on_top for r in items)
+    sel = _sel(cat, floor_count=40, wall_count=0, allowed_classes=["sofa", "table"])
+    assert {r.class_name for r in sel.floor} == {"couch", "table"}  # 'sofa' matches 'couch' by synonym
+    sel = _sel(cat, floor_count=60, wall_count=0, max_classes=5, class_pool_seed=3)
+    assert len({r.class_name for r in sel.floor}) <= 5
+    with pytest.raises(ConfigError, match="cluster"):
+        _sel(_catalog(tmp_path / "b", clusters=False), clusters=[0])
+    with pytest.raises(ConfigError, match="no floor asset"):
+        _sel(cat, allowed_classes=["spaceship"])
+
+
+def test_class_lists_and_synonyms(tmp_path):
+    s18, s200 = resolve_class_list("scannet18"), resolve_class_list("scannet200")
+    assert len(s18) == 18 and len(s200) == 198
+    assert "wall" not in s200.classes and "floor" not in s200.classes
+    cases18 = {"couch": "sofa", "Bookcase": "bookshelf", "fridge": "refrigerator", "armchair": "chair",
+               "office_chair": "chair", "coffee-table": "table", "dining chair": "chair", "painting": "picture"}
+    for name, want in cases18.items():
+        assert s18.match(name) == want, name
+    cases200 = {"night table": "nightstand", "sofa": "couch", "fridge": "refrigerator", "bookcase": "bookshelf",
+                "television": "tv", "chairs": "chair"}
+    for name, want in cases200.items():
+        assert s200.match(name) == want, name
+    assert s18.match("widget") is None and s200.match("spaceship") is None
+    assert canonical_class("Night_Stand") == "nightstand"
+    f = tmp_path / "mine.txt"
+    f.write_text("# my classes\nSofa\nlamp\n\n", encoding="utf-8")
+    mine = resolve_class_list(str(f))
+    assert mine.classes == ("sofa", "lamp") and mine.match("couch") == "sofa" and mine.match("floor lamp") == "lamp"
+    with pytest.raises(ConfigError, match="neither"):
+        resolve_class_list(str(tmp_path / "missing.txt"))
