@@ -88,7 +88,7 @@ def render_views(scene_mesh: SceneMesh, n: int = 4, size: int = 512) -> list[byt
     pts = v[f[floor_faces].ravel()] if floor_faces.any() else v
     floor_z = float(pts[:, 2].min())
     height = float(v[:, 2].max()) - floor_z
-    eyes, target = camera_positions(pts[:, :2].min(0), pts[:, :2].max(0), floor_z, max(height, 0.5), n)
+    eyes, target = camera_positions(pts[:, :2].min(0), pts[:, :2].max(0), floor_z, max(height, 2.0), n)
     mesh = trimesh.Trimesh(v, f, process=False)
     normals = np.asarray(mesh.face_normals, np.float64)
     colors = scene_mesh.face_colors.astype(np.float32)
@@ -114,7 +114,7 @@ def render_point_views(coord: np.ndarray, color: np.ndarray, n: int = 4, size: i
         raise RenderError("render_point_views: no points")
     p = coord.astype(np.float64)
     lo, hi = np.percentile(p, 0.5, axis=0), np.percentile(p, 99.5, axis=0)
-    eyes, target = camera_positions(lo[:2], hi[:2], float(lo[2]), max(float(hi[2] - lo[2]), 0.5), n)
+    eyes, target = camera_positions(lo[:2], hi[:2], float(lo[2]), max(float(hi[2] - lo[2]), 2.0), n)
     t = np.tan(np.radians(FOV_DEG) / 2)
     focal = size / 2 / t
     col = color.astype(np.float32)
