@@ -1,7 +1,118 @@
-"""CLI commands: scene (being written)."""
+"""CLI commands: `assist3d layout` (one scene's layout) and `assist3d layout-png` (top-down picture)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Optional
 
 import typer
 
+from ..errors import ConfigError, DataError
+
 
 def register(app: typer.Typer) -> None:
-    pass
+    app.command("layout")(layout_cmd)
+    app.command("layout-png")(layout_png_cmd)
+
+
+def _read_yaml(path: Path | None) -> dict:
+    if path is None:
+        return {}
+    import yaml
+
+    if not path.is_file():
+        raise ConfigError(f"{path}: config file not found")
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except yaml.YAMLError as e:
+        raise ConfigError(f"{path}: not valid YAML ({e})") from None
+    if data is not None and not isinstance(data, dict):
+        raise ConfigError(f"{path}: expected a mapping at the top level, got {type(data).__name__}")
+    return data or {}
+
+
+def compose_config(config: Path | None, preset: str | None, overrides: dict):
+    """Preset overrides, then the user's config file, then command-line overrides (last wins)."""
+    from ..config import _merge
+    from ..presets import apply_preset
+
+    data = _merge(_read_yaml(config), overrides)
+    name = preset or data.get("preset") or "assist3d"
+    return apply_preset(data, name)
+
+
+def layout_cmd(
+    assets: Optional[str] = typer.Option(None, "--assets", help="Asset catalog folder (default: $ASSIST3D_ASSETS, "
+                                                                "the default catalog, or the built-in procedural "
+                                                                "library)."),
+    seed: int = typer.Option(0, "--seed", help="Scene seed: the same seed gives the same layout."),
+    out: Path = typer.Option(..., "--out", help="Output folder for layout.json, scene.glb (and layout.png)."),
+    png: bool = typer.Option(False, "--png", help="Also write a top-down picture layout.png."),
+    config: Optional[Path] = typer.Option(None, "--config", help="YAML config file (see `assist3d generate`)."),
+    preset: Optional[str] = typer.Option(None, "--preset", help="Generator preset: assist3d, randomrooms, "
+                                                                "holodeck-style, no-context, ablations..."),
+    scene_index: int = typer.Option(0, "--scene-index", help="Index of the scene in a dataset (picks the "
+                                                             "random or complementary selection strategy)."),
+    llm_base_url: Optional[str] = typer.Option(None, "--llm-base-url", help="OpenAI-compatible endpoint for the "
+                                                                           "LLM relation planner."),
+    llm_model: Optional[str] = typer.Option(None, "--llm-model", help="Model name for --llm-base-url."),
+    no_glb: bool = typer.Option(False, "--no-glb", help="Skip writing scene.glb."),
+    as_json: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
+) -> None:
+    """Build one scene's layout (no rendering): layout.json and scene.glb."""
+    from ..assets import open_catalog
+    from ..fileio import write_json_atomic
+    from ..scene.layout import build_layout, layout_summary
+
+    overrides: dict = {}
+    if assets is not None:
+        overrides.setdefault("assets", {})["library"] = assets
+    if llm_base_url is not None:
+        overrides.setdefault("llm", {})["base_url"] = llm_base_url
+    if llm_model is not None:
+        overrides.setdefault("llm", {})["model"] = llm_model
+    cfg = compose_config(config, preset, overrides)
+    catalog = open_catalog(cfg.assets.library, procedural_count=cfg.assets.procedural_count,
+                           procedural_seed=cfg.assets.procedural_seed)
+    layout = build_layout(catalog, cfg, seed, scene_index=scene_index)
+    out.mkdir(parents=True, exist_ok=True)
+    write_json_atomic(out / "layout.json", layout.to_json())
+    if not no_glb:
+        from ..scene.assemble import export_glb
+
+        export_glb(layout, catalog, out / "scene.glb")
+    if png:
+        from ..scene.topdown import render_topdown
+
+        render_topdown(layout, catalog, out / "layout.png", title=f"seed {seed} ({cfg.preset})")
+    s = layout_summary(layout)
+    if as_json:
+        typer.echo(json.dumps({**s, "out": str(out), "planner": sorted(set(layout.planner.values()))}))
+        return
+    p = s["placed"]
+    typer.echo(f"layout seed {seed}: {s['instances']} placed (floor {p['floor']}, wall {p['wall']}, "
+               f"on-top {p['obj']}), {s['dropped']} dropped, {s['seconds']:.2f} s -> {out}")
+
+
+def layout_png_cmd(
+    layout_json: Path = typer.Argument(..., help="A layout.json written by `assist3d layout` or `generate`."),
+    assets: Optional[str] = typer.Option(None, "--assets", help="Asset catalog the layout was built from."),
+    out: Path = typer.Option(..., "--out", help="PNG file to write."),
+    title: Optional[str] = typer.Option(None, "--title", help="Title of the picture (default: the seed)."),
+) -> None:
+    """Render a top-down picture of an existing layout."""
+    from ..assets import open_catalog
+    from ..contracts import SceneLayout
+    from ..scene.topdown import render_topdown
+
+    try:
+        data = json.loads(layout_json.read_text(encoding="utf-8"))
+        layout = SceneLayout.from_json(data)
+    except FileNotFoundError:
+        raise DataError(f"{layout_json}: layout file not found") from None
+    except (OSError, json.JSONDecodeError, KeyError, TypeError, ValueError) as e:
+        raise DataError(f"{layout_json}: not a readable layout.json ({type(e).__name__}: {e})") from None
+    catalog = open_catalog(assets)
+    render_topdown(layout, catalog, out, title=title)
+    typer.echo(f"wrote {out}")

@@ -1,0 +1,264 @@
+"""The layout facade: room, selection, relation planning and placement for one scene.
+
+``build_layout(catalog, cfg, seed)`` runs, each stage with its own random stream
+(``make_rng(seed, "room")``, ``"select"``, ``("plan", group)``, ``("place", group)``):
+
+1. sample the room shell;
+2. select floor, wall and on-top assets;
+3. plan and place the floor group, then the wall group (knowing the floor instances), then, for
+   every placed instance with a support surface, its on-top group ``on:<id>``.
+
+Nothing here raises for an impossible scene: plans with unknown relations, targets or duplicate
+objects are repaired (constraints dropped, with a note; an object whose *hard* relation is broken
+is dropped), placement failures become dropped objects with reasons, and on-top objects whose
+parent was not placed are dropped as "parent not placed".
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections import defaultdict, deque
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..assets.catalog import Catalog
+from ..config import GenerateConfig
+from ..contracts import AssetRecord, DroppedObject, PlacedInstance, Relation, SceneLayout
+from ..errors import AssistError
+from ..rng import make_rng
+from .planners import make_planner
+from .relations import CROSS_GROUP, RELATIONS, GroupPlan, PlannedObject, Planner, PlanRequest, group_kind
+from .room import sample_room
+from .rules import RulePlanner
+from .selection import Selection, select_objects
+
+log = logging.getLogger(__name__)
+
+MAX_NOTES = 50
+SUMMED_PLAN_STATS = ("llm_calls", "cache_hits", "repairs", "prompt_tokens", "completion_tokens")
+
+
+def _placement_api() -> tuple[Callable, Callable]:
+    """(place_group, place_group_random) of the placement engine (imported on first use)."""
+    from .placement import place_group, place_group_random
+
+    return place_group, place_group_random
+
+
+def sanitise_plan(plan: GroupPlan, request: PlanRequest) -> tuple[GroupPlan, list[DroppedObject], list[str]]:
+    """A well-formed copy of ``plan``: duplicates and out-of-range objects removed, soft relations
+    that are unknown, not allowed for the group or aimed at an unknown/later object removed, objects
+    whose *hard* relation is broken dropped, objects the plan forgot appended without relations.
+
+    Returns the plan, the dropped objects (with reasons) and notes describing every repair.
+    """
+    kind = group_kind(request.group)
+    placed_ids = {p.id for p in request.placed} | ({request.support.id} if request.support else set())
+    notes: list[str] = []
+    dropped: list[DroppedObject] = []
+    seen: set[int] = set()
+    new_pos: dict[int, int] = {}  # old position -> new position of kept objects
+    kept: list[PlannedObject] = []
+    for pos, item in enumerate(plan.order):
+        if not 0 <= item.source < len(request.objects):
+            notes.append(f"{request.group}: position {pos}: object index {item.source} out of range; ignored")
+            continue
+        if item.source in seen:
+            notes.append(f"{request.group}: position {pos}: object {item.source} listed twice; kept the first")
+            continue
+        seen.add(item.source)
+        rec = request.objects[item.source]
+        rels: list[Relation] = []
+        broken_hard: str | None = None
+        for r in item.relations:
+            problem = _relation_problem(r, kind, placed_ids, new_pos)
+            if problem is None:
+                rels.append(Relation(r.kind, new_pos[r.target] if _indexes_plan(r) else r.target, r.value, r.hard))
+            elif r.hard:
+                broken_hard = problem
+                break
+            else:
+                notes.append(f"{request.group}: {rec.class_name} ({rec.id}): dropped relation: {problem}")
+        if broken_hard is not None:
+            dropped.append(DroppedObject(rec.id, request.group, f"hard relation unusable: {broken_hard}"))
+            continue
+        new_pos[pos] = len(kept)
+        kept.append(PlannedObject(item.source, tuple(rels)))
+    dropped_ids = {d.asset for d in dropped}
+    for i, rec in enumerate(request.objects):
+        if i not in seen:
+            notes.append(f"{request.group}: {rec.class_name} ({rec.id}) missing from the plan; appended without "
+                         f"relations")
+            kept.append(PlannedObject(i))
+    fixed = GroupPlan(plan.group, tuple(kept), plan.planner, plan.notes + tuple(notes), dict(plan.stats))
+    if dropped_ids:
+        log.debug("%s: %d object(s) dropped by the plan repair", request.group, len(dropped))
+    return fixed, dropped, notes
+
+
+def _indexes_plan(r: Relation) -> bool:
+    spec = RELATIONS.get(r.kind)
+    return spec is not None and spec.needs_target and r.kind not in CROSS_GROUP
+
+
+def _relation_problem(r: Relation, kind: str, placed_ids: set[int], new_pos: dict[int, int]) -> str | None:
+    spec = RELATIONS.get(r.kind)
+    if spec is None:
+        return f"unknown relation {r.kind!r}"
+    if kind not in spec.groups:
+        return f"relation {r.kind!r} is not allowed for {kind} objects"
+    if len(r.value) != spec.values:
+        return f"relation {r.kind!r} needs {spec.values} value(s), got {len(r.value)}"
+    if spec.needs_target:
+        if r.target is None:
+            return f"relation {r.kind!r} has no target"
+        if r.kind in CROSS_GROUP:
+            if r.target not in placed_ids:
+                return f"relation {r.kind!r} to unknown instance {r.target}"
+        elif r.target not in new_pos:
+            return f"relation {r.kind!r} to unknown or later object {r.target}"
+    return None
+
+
+@dataclass
+class _Run:
+    """Mutable bookkeeping of one build_layout call."""
+
+    catalog: Catalog
+    cfg: GenerateConfig
+    seed: int
+    planner: Planner
+    room: object
+    instances: list[PlacedInstance] = field(default_factory=list)
+    dropped: list[DroppedObject] = field(default_factory=list)
+    planners: dict = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+    plan_stats: dict = field(default_factory=lambda: defaultdict(float))
+    place_stats: dict = field(default_factory=lambda: defaultdict(float))
+    timing: dict = field(default_factory=dict)
+
+    @property
+    def next_id(self) -> int:
+        return 1 + max((i.id for i in self.instances), default=0)
+
+    def plan(self, request: PlanRequest, rng: np.random.Generator) -> GroupPlan:
+        try:
+            plan = self.planner.plan(request, rng=rng)
+        except AssistError as e:
+            self.notes.append(f"{request.group}: planner {self.planner.name} failed ({e}); rule-based plan used")
+            plan = RulePlanner().plan(request, rng=rng)
+        for k in SUMMED_PLAN_STATS:
+            v = plan.stats.get(k)
+            if isinstance(v, (int, float)):
+                self.plan_stats[k] += v
+        return plan
+
+    def run_group(self, group: str, objects: tuple[AssetRecord, ...], support: PlacedInstance | None,
+                  random_mode: bool) -> list[int | None]:
+        """Plan and place one group. Returns, for each object, the id of its placed instance or None."""
+        place_group, place_group_random = _placement_api()
+        t0 = time.perf_counter()
+        placed_before = tuple(self.instances)
+        request = PlanRequest(group, objects, self.room, placed_before, support)  # type: ignore[arg-type]
+        place_rng = make_rng(self.seed, "place", group)
+        extra_dropped: list[DroppedObject] = []
+        order: list[int] = list(range(len(objects)))
+        try:
+            if random_mode:
+                self.planners[group] = "none"
+                result = place_group_random(request, self.catalog, cfg=self.cfg.layout, rng=place_rng,
+                                            next_id=self.next_id)
+            else:
+                plan = self.plan(request, make_rng(self.seed, "plan", group))
+                plan, extra_dropped, notes = sanitise_plan(plan, request)
+                self.notes.extend(notes)
+                self.planners[group] = plan.planner
+                order = [p.source for p in plan.order]
+                result = place_group(request, plan, self.catalog, cfg=self.cfg.layout, rng=place_rng,
+                                     next_id=self.next_id)
+        except AssistError as e:
+            reason = f"placement failed: {e}"
+            self.dropped.extend(DroppedObject(r.id, group, reason) for r in objects)
+            self.timing[group] = round(time.perf_counter() - t0, 4)
+            return [None] * len(objects)
+        self.instances.extend(result.instances)
+        self.dropped.extend(extra_dropped)
+        self.dropped.extend(result.dropped)
+        self.notes.extend(str(n) for n in (result.stats or {}).get("notes", ()) or ())
+        for k, v in (result.stats or {}).items():
+            if isinstance(v, (int, float)) and not isinstance(v, bool) and "second" not in k and "time" not in k:
+                self.place_stats[k] += v
+        self.timing[group] = round(time.perf_counter() - t0, 4)
+        # map placed instances back to the selected objects (the same asset may be selected twice)
+        queue: dict[str, deque[int]] = defaultdict(deque)
+        for src in order + [i for i in range(len(objects)) if i not in set(order)]:
+            queue[objects[src].id].append(src)
+        ids: list[int | None] = [None] * len(objects)
+        for inst in result.instances:
+            q = queue.get(inst.asset)
+            if q:
+                ids[q.popleft()] = inst.id
+        return ids
+
+    def on_top(self, parents: tuple[AssetRecord, ...], ids: list[int | None],
+               lists: tuple[tuple[AssetRecord, ...], ...], random_mode: bool) -> None:
+        for rec, inst_id, items in zip(parents, ids, lists):
+            if not items:
+                continue
+            if inst_id is None:
+                self.dropped.extend(DroppedObject(r.id, "obj", "parent not placed") for r in items)
+                continue
+            support = next(i for i in self.instances if i.id == inst_id)
+            self.run_group(f"on:{inst_id}", items, support, random_mode)
+
+
+def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_index: int = 0,
+                 planner: Planner | None = None) -> SceneLayout:
+    """One scene's layout. The same (catalog, cfg, seed, scene_index) gives the same layout
+    (timings aside). ``planner`` defaults to :func:`~assist3d.scene.planners.make_planner`."""
+    t0 = time.perf_counter()
+    planner = planner if planner is not None else make_planner(cfg)
+    room = sample_room(cfg.room, make_rng(seed, "room"))
+    sel: Selection = select_objects(catalog, cfg.selection, make_rng(seed, "select"), scene_index=scene_index)
+    run = _Run(catalog, cfg, seed, planner, room)
+    random_mode = cfg.layout.planner == "none"
+    floor_ids = run.run_group("floor", sel.floor, None, random_mode) if sel.floor else []
+    wall_ids = run.run_group("wall", sel.wall, None, random_mode) if sel.wall else []
+    run.on_top(sel.floor, floor_ids, sel.floor_on_top, random_mode)
+    run.on_top(sel.wall, wall_ids, sel.wall_on_top, random_mode)
+
+    placed = {g: 0 for g in ("floor", "wall", "obj")}
+    for inst in run.instances:
+        placed["obj" if inst.group.startswith("on:") or inst.group == "obj" else inst.group] += 1
+    stats = {
+        "selected": {"floor": len(sel.floor), "wall": len(sel.wall),
+                     "obj": sum(map(len, sel.floor_on_top)) + sum(map(len, sel.wall_on_top))},
+        "placed": placed,
+        "dropped": len(run.dropped),
+        "selection": dict(sel.stats),
+        "llm_calls": int(run.plan_stats.get("llm_calls", 0)),
+        "cache_hits": int(run.plan_stats.get("cache_hits", 0)),
+        "repairs": int(run.plan_stats.get("repairs", 0)),
+        "placement": {k: (int(v) if float(v).is_integer() else round(v, 6)) for k, v in sorted(run.place_stats.items())},
+        "notes": run.notes[:MAX_NOTES],
+        "timing": run.timing,
+    }
+    for k in ("prompt_tokens", "completion_tokens"):
+        if k in run.plan_stats:
+            stats[k] = int(run.plan_stats[k])
+    seconds = time.perf_counter() - t0
+    log.debug("layout seed %d: %d placed, %d dropped, %.3f s", seed, len(run.instances), len(run.dropped), seconds)
+    return SceneLayout(room=room, instances=tuple(run.instances), dropped=tuple(run.dropped), seed=int(seed),
+                       seconds=seconds, planner=dict(run.planners), stats=stats)
+
+
+def layout_summary(layout: SceneLayout) -> dict:
+    """Counts for a one-line report: placed per group, dropped, seconds."""
+    placed = {g: 0 for g in ("floor", "wall", "obj")}
+    for inst in layout.instances:
+        placed["obj" if inst.group.startswith("on:") or inst.group == "obj" else inst.group] += 1
+    return {"placed": placed, "instances": len(layout.instances), "dropped": len(layout.dropped),
+            "seconds": round(layout.seconds, 3)}
