@@ -13,6 +13,7 @@ import time
 from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
+from typing import Callable
 
 SENTINEL = "sk-test-SENTINEL-9f1c2e7d4b"
 
@@ -38,8 +39,10 @@ def completion(content: str, prompt_tokens: int = 11, completion_tokens: int = 7
 
 
 class FakeServer:
-    def __init__(self, steps: list[Step]) -> None:
-        self.steps = list(steps)
+    def __init__(self, steps: list[Step], responder: Callable[[dict], Step] | None = None) -> None:
+        """``responder(request_json) -> Step``, when given, decides every answer instead of ``steps``."""
+        self.steps = list(steps) or [Step()]
+        self.responder = responder
         self.requests: list[dict] = []
         self.active = 0
         self.max_active = 0
@@ -56,7 +59,8 @@ class FakeServer:
                 with owner._lock:
                     owner.requests.append({"path": self.path, "headers": dict(self.headers),
                                            "json": json.loads(body)})
-                    step = owner.steps[min(len(owner.requests) - 1, len(owner.steps) - 1)]
+                    step = (owner.responder(owner.requests[-1]["json"]) if owner.responder else
+                            owner.steps[min(len(owner.requests) - 1, len(owner.steps) - 1)])
                     owner.active += 1
                     owner.max_active = max(owner.max_active, owner.active)
                 try:
