@@ -1,7 +1,208 @@
-"""CLI commands: generate (being written)."""
+"""``assist3d generate | show | bench``: the dataset generator, a scene preview, a speed check."""
+
+from __future__ import annotations
+
+import json
+import logging
+import statistics
+import sys
+import time
+from pathlib import Path
+from typing import List, Optional
 
 import typer
 
+from ..errors import ConfigError
+
+log = logging.getLogger("assist3d.cli.generate")
+
+STAGE_NAMES = ("select", "layout", "assemble", "render", "fuse", "write")
+
+
+def _raw_config(path: Optional[Path]) -> dict:
+    """The user's config file as a plain dict (validated), so presets can sit under it."""
+    if path is None:
+        return {}
+    import yaml
+
+    from ..config import load_config
+
+    load_config(path)  # validates and names the file on error
+    data = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
+    return data
+
+
+def build_config(config: Optional[Path], preset: Optional[str], overrides: dict):
+    """Preset < config file < command-line flags."""
+    from ..config import _merge
+    from ..presets import apply_preset
+
+    data = _merge(_raw_config(config), overrides)
+    name = preset or data.pop("preset", None) or "assist3d"
+    data.pop("preset", None)
+    return apply_preset(data, name)
+
+
+def _stage_means(metas: list[dict]) -> dict[str, float]:
+    out = {}
+    for s in STAGE_NAMES:
+        vals = [float(m.get("seconds", {}).get(s, 0.0)) for m in metas]
+        out[s] = statistics.fmean(vals) if vals else 0.0
+    return out
+
+
+def _summary_table(run, console) -> None:
+    from rich.table import Table
+
+    entries = [e for e in run.manifest.entries if e.get("index") in set(run.requested)]
+    t = Table(title=f"dataset {run.out}")
+    t.add_column("")
+    t.add_column("mean", justify="right")
+    t.add_column("median", justify="right")
+    t.add_column("min", justify="right")
+    t.add_column("max", justify="right")
+
+    def row(name: str, vals: list[float], fmt: str) -> None:
+        if vals:
+            t.add_row(name, fmt.format(statistics.fmean(vals)), fmt.format(statistics.median(vals)),
+                      fmt.format(min(vals)), fmt.format(max(vals)))
+
+    t.add_row("scenes", str(len(entries)), f"{len(run.generated)} new", f"{len(run.skipped)} kept", "")
+    row("instances / scene", [float(e.get("instances", 0)) for e in entries], "{:.1f}")
+    row("points / scene", [float(e.get("points", 0)) for e in entries], "{:,.0f}")
+    row("dropped / scene", [float(e.get("dropped", 0)) for e in entries], "{:.1f}")
+    fresh = run.generated
+    for s in STAGE_NAMES:
+        row(f"seconds: {s}", [float(m["seconds"].get(s, 0.0)) for m in fresh], "{:.3f}")
+    row("seconds: total", [sum(m["seconds"].values()) for m in fresh], "{:.3f}")
+    checks = [m["check"] for m in fresh if "check" in m]
+    if checks:
+        row("label agreement", [c["agreement"] for c in checks], "{:.5f}")
+    console.print(t)
+
 
 def register(app: typer.Typer) -> None:
-    pass
+    @app.command()
+    def generate(
+        out: Path = typer.Option(..., "--out", "-o", help="Output dataset folder (created; resumed if it exists)."),
+        num_scenes: Optional[int] = typer.Option(None, "--num-scenes", "-n", min=1, help="Scenes 0..N-1."),
+        seed: Optional[int] = typer.Option(None, "--seed", help="Global seed (default: config, 0)."),
+        workers: int = typer.Option(1, "--workers", "-w", min=1, help="Worker processes."),
+        config: Optional[Path] = typer.Option(None, "--config", "-c", help="YAML config file."),
+        assets: Optional[Path] = typer.Option(None, "--assets", help="Asset catalog folder (default: the default "
+                                                                       "catalog if imported, else the built-in "
+                                                                       "procedural library)."),
+        preset: Optional[str] = typer.Option(None, "--preset", help="Generator preset (assist3d, randomrooms, "
+                                                                      "holodeck-style, no-context, mesh-sampled, ...)."),
+        save_mesh: bool = typer.Option(False, "--save-mesh", help="Also write each scene's scene.glb."),
+        ply: bool = typer.Option(False, "--ply", help="Also write points.ply coloured by instance."),
+        llm_base_url: Optional[str] = typer.Option(None, "--llm-base-url", help="OpenAI-compatible endpoint."),
+        llm_model: Optional[str] = typer.Option(None, "--llm-model", help="LLM model name."),
+        only: Optional[List[int]] = typer.Option(None, "--only", help="Generate only scene K (repeatable)."),
+        start: int = typer.Option(0, "--start", min=0, help="First scene index (with --count)."),
+        count: Optional[int] = typer.Option(None, "--count", min=1, help="Number of scenes from --start."),
+        verify: bool = typer.Option(False, "--verify", help="Re-cast rays and check every scene's labels."),
+        as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+    ) -> None:
+        """Generate a dataset: one Pointcept-layout folder per scene plus manifest.json."""
+        from rich.console import Console
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, \
+            TimeRemainingColumn
+
+        from ..pipeline import generate_dataset
+
+        overrides: dict = {}
+        if seed is not None:
+            overrides["seed"] = seed
+        if assets is not None:
+            overrides.setdefault("assets", {})["library"] = str(assets)
+        if save_mesh or ply:
+            overrides["output"] = {**({"save_mesh": True} if save_mesh else {}), **({"ply": True} if ply else {})}
+        if llm_base_url or llm_model:
+            overrides["llm"] = {k: v for k, v in (("base_url", llm_base_url), ("model", llm_model)) if v}
+        cfg = build_config(config, preset, overrides)
+        if only:
+            indices = list(only)
+        elif count is not None:
+            indices = list(range(start, start + count))
+        elif num_scenes is not None:
+            indices = list(range(start, num_scenes))
+        else:
+            raise ConfigError("give --num-scenes N, --only K or --start S --count C")
+        if not indices:
+            raise ConfigError(f"no scenes selected (--start {start} is past --num-scenes {num_scenes})")
+        log.info("generating %d scenes into %s (preset %s, seed %d, %d worker%s)", len(indices), out, cfg.preset,
+                 cfg.seed, workers, "s" if workers > 1 else "")
+        err = Console(stderr=True)
+        done_metas: list[dict] = []
+        with Progress(TextColumn("[bold]scenes"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                      TimeRemainingColumn(), TextColumn("{task.fields[stages]}"), console=err,
+                      disable=as_json) as bar:
+            task = bar.add_task("scenes", total=len(indices), stages="")
+
+            def on_start(total: int, already: int) -> None:
+                bar.update(task, total=total)
+
+            def on_scene(meta: dict, skipped: bool) -> None:
+                if not skipped:
+                    done_metas.append(meta)
+                means = _stage_means(done_metas)
+                stages = " ".join(f"{k} {v:.2f}" for k, v in means.items()) if done_metas else "resumed"
+                bar.update(task, advance=1, stages=f"s/scene: {stages}")
+
+            run = generate_dataset(cfg, out, indices, workers=workers, verify=verify, on_scene=on_scene,
+                                   on_start=on_start)
+        if as_json:
+            sys.stdout.write(json.dumps({
+                "out": str(out), "scenes": len(indices), "generated": len(run.generated), "skipped": len(run.skipped),
+                "stages": _stage_means(run.generated), "failed_checks": run.failed_checks}) + "\n")
+        else:
+            _summary_table(run, Console())
+        if run.failed_checks:
+            log.error("label check failed for %d scenes: %s", len(run.failed_checks), ", ".join(run.failed_checks))
+            raise typer.Exit(1)
+
+    @app.command()
+    def show(
+        path: Path = typer.Argument(..., help="A scene folder or a dataset folder (its first scene)."),
+        out: Optional[Path] = typer.Option(None, "--out", "-o", help="PNG to write (default: <scene>/preview.png)."),
+        scene: Optional[str] = typer.Option(None, "--scene", help="Scene id inside a dataset folder."),
+    ) -> None:
+        """Picture a generated scene: top-down layout and the cloud coloured by instance."""
+        from ..export.preview import find_scene_dir, render_preview
+
+        d = find_scene_dir(path, scene)
+        png = render_preview(d, out or d / "preview.png")
+        typer.echo(str(png))
+
+    @app.command()
+    def bench(
+        scenes: int = typer.Option(5, "--scenes", min=1, help="Scenes to generate (seeded, fixed)."),
+        assets: Optional[Path] = typer.Option(None, "--assets", help="Asset catalog folder."),
+        seed: int = typer.Option(0, "--seed", help="Global seed of the benchmark scenes."),
+        keep: Optional[Path] = typer.Option(None, "--keep", help="Write the scenes here instead of a temp folder."),
+        as_json: bool = typer.Option(False, "--json", help="Print JSON only."),
+    ) -> None:
+        """Time the generator at paper settings (one worker): seconds per stage and peak memory."""
+        from ..pipeline import run_benchmark
+
+        res = run_benchmark(scenes=scenes, assets=str(assets) if assets else None, seed=seed,
+                            out=str(keep) if keep else None)
+        if as_json:
+            sys.stdout.write(json.dumps(res) + "\n")
+            return
+        from rich.console import Console
+        from rich.table import Table
+
+        t = Table(title=f"assist3d bench: {res['scenes']} scenes at paper settings, 1 worker")
+        t.add_column("stage")
+        t.add_column("median s", justify="right")
+        for k, v in res["stages"].items():
+            t.add_row(k, f"{v:.3f}")
+        t.add_row("[bold]per scene (median)", f"[bold]{res['seconds_per_scene']['median']:.3f}")
+        t.add_row("per scene (max)", f"{res['seconds_per_scene']['max']:.3f}")
+        t.add_row("peak memory, MB", f"{res['peak_memory_mb']:.0f}")
+        t.add_row("points / scene (median)", f"{res['points_per_scene']:,.0f}")
+        t.add_row("instances / scene (median)", f"{res['instances_per_scene']:.0f}")
+        t.add_row("triangles / scene (median)", f"{res['triangles_per_scene']:,.0f}")
+        Console().print(t)

@@ -1,0 +1,92 @@
+"""The dataset-level ``manifest.json``: resolved config, versions, seed, classes and one entry
+per finished scene, rewritten atomically as scenes finish. Scene entries are rebuilt from the
+scenes' own completion markers, so the manifest is always consistent with the folders."""
+
+from __future__ import annotations
+
+import json
+import logging
+from importlib import metadata
+from pathlib import Path
+
+from ..errors import DataError
+from ..fileio import write_json_atomic
+
+log = logging.getLogger(__name__)
+
+__all__ = ["MANIFEST_NAME", "versions", "scene_entry", "Manifest", "IGNORED_CONFIG_KEYS"]
+
+MANIFEST_NAME = "manifest.json"
+# settings that change speed or extra files, never the arrays: a resume may change them
+IGNORED_CONFIG_KEYS = (("render", "threads"), ("output", "ply"), ("output", "save_mesh"))
+
+
+def versions() -> dict[str, str]:
+    """Versions of the packages that determine the output."""
+    from .. import __version__
+
+    out = {"assist3d": __version__}
+    for pkg in ("numpy", "trimesh", "embreex", "scipy", "shapely", "fpsample"):
+        try:
+            out[pkg] = metadata.version(pkg)
+        except metadata.PackageNotFoundError:
+            out[pkg] = "missing"
+    return out
+
+
+def scene_entry(meta: dict) -> dict:
+    """The manifest entry of a scene, from its completion marker."""
+    keys = ("id", "index", "seed", "instances", "points", "seconds", "dropped", "planner", "check")
+    return {k: meta[k] for k in keys if k in meta}
+
+
+def _comparable(cfg: dict) -> dict:
+    out = json.loads(json.dumps(cfg))
+    for section, key in IGNORED_CONFIG_KEYS:
+        out.get(section, {}).pop(key, None)
+    return out
+
+
+class Manifest:
+    """The manifest of one output folder."""
+
+    def __init__(self, root: str | Path, config: dict, seed: int, classes: tuple[str, ...], assets: str) -> None:
+        self.root = Path(root)
+        self.path = self.root / MANIFEST_NAME
+        self.data = {"format": "assist3d-dataset", "version": 1, "seed": int(seed), "assets": assets,
+                     "classes": list(classes), "versions": versions(), "config": config, "scenes": []}
+        self._entries: dict[str, dict] = {}
+
+    def check_compatible(self) -> None:
+        """Raise DataError if the folder already holds a dataset made with another config, seed
+        or class list (mixing them would silently corrupt it)."""
+        if not self.path.is_file():
+            return
+        try:
+            old = json.loads(self.path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as e:
+            raise DataError(f"{self.path}: unreadable manifest ({e}); remove it or choose another --out") from None
+        diffs = []
+        if old.get("seed") != self.data["seed"]:
+            diffs.append(f"seed {old.get('seed')} != {self.data['seed']}")
+        if old.get("classes") != self.data["classes"]:
+            diffs.append("class list")
+        a, b = _comparable(old.get("config", {})), _comparable(self.data["config"])
+        for section in sorted(set(a) | set(b)):
+            if a.get(section) != b.get(section):
+                diffs.append(f"config.{section}")
+        if diffs:
+            raise DataError(f"{self.path}: this folder holds a dataset generated with different settings "
+                            f"({', '.join(diffs)}); use another --out or delete the folder")
+
+    def add(self, meta: dict) -> None:
+        entry = scene_entry(meta)
+        self._entries[entry["id"]] = entry
+
+    def write(self) -> None:
+        self.data["scenes"] = [self._entries[k] for k in sorted(self._entries)]
+        write_json_atomic(self.path, self.data)
+
+    @property
+    def entries(self) -> list[dict]:
+        return [self._entries[k] for k in sorted(self._entries)]

@@ -1,0 +1,130 @@
+"""Scene folders in the Pointcept layout, with a completion marker written last.
+
+``DIR/<scene_id>/`` holds ``coord.npy`` (N, 3) float32, ``color.npy`` (N, 3) uint8,
+``normal.npy`` (N, 3) float32, ``instance.npy`` (N,) int32 (-1 = background), ``segment.npy``
+(N,) int32 (class index, -1 = background), ``layout.json``, optionally ``points.ply`` and
+``scene.glb``, and last ``meta.json`` with the seed, counts, timings and a hash of every file.
+A folder without a valid ``meta.json`` is incomplete and is regenerated on resume.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import logging
+import time
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ..contracts import PointSample, SceneLayout
+from ..errors import DataError
+from ..fileio import write_bytes_atomic, write_json_atomic
+from .ply import ply_bytes
+
+log = logging.getLogger(__name__)
+
+__all__ = ["ARRAYS", "META_NAME", "write_scene", "read_scene_meta", "load_scene_arrays", "file_digest"]
+
+ARRAYS: dict[str, tuple[str, int]] = {  # name -> (dtype, columns; 0 = 1-d)
+    "coord": ("float32", 3),
+    "color": ("uint8", 3),
+    "normal": ("float32", 3),
+    "instance": ("int32", 0),
+    "segment": ("int32", 0),
+}
+META_NAME = "meta.json"
+MARKER_FORMAT = "assist3d-scene"
+
+
+def file_digest(data: bytes) -> str:
+    """blake2b-128 hex digest of file contents."""
+    return hashlib.blake2b(data, digest_size=16).hexdigest()
+
+
+def _npy_bytes(a: np.ndarray) -> bytes:
+    buf = io.BytesIO()
+    np.save(buf, np.ascontiguousarray(a), allow_pickle=False)
+    return buf.getvalue()
+
+
+def write_scene(scene_dir: str | Path, sample: PointSample, layout: SceneLayout, meta: dict, *,
+                ply: bool = False, glb_writer: Callable[[Path], None] | None = None) -> dict:
+    """Write one scene folder atomically, file by file, and ``meta.json`` last.
+
+    ``meta`` is merged into the marker (seed, timings, ...); the marker also records every file's
+    size and digest, and, when ``meta["seconds"]`` is a dict, the time spent writing as its
+    ``"write"`` entry. ``glb_writer(path)`` writes the assembled mesh when given. Returns the marker.
+    """
+    t0 = time.perf_counter()
+    d = Path(scene_dir)
+    d.mkdir(parents=True, exist_ok=True)
+    (d / META_NAME).unlink(missing_ok=True)  # the folder is incomplete until the marker is back
+    files: dict[str, dict] = {}
+
+    def put(name: str, data: bytes) -> None:
+        write_bytes_atomic(d / name, data)
+        files[name] = {"bytes": len(data), "blake2b": file_digest(data)}
+
+    arrays = {"coord": sample.coord, "color": sample.color, "normal": sample.normal,
+              "instance": sample.instance, "segment": sample.segment}
+    for name, a in arrays.items():
+        put(f"{name}.npy", _npy_bytes(a))
+    put("layout.json", (json.dumps(layout.to_json(), indent=1) + "\n").encode("utf-8"))
+    if ply:
+        put("points.ply", ply_bytes(sample))
+    else:
+        (d / "points.ply").unlink(missing_ok=True)
+    if glb_writer is not None:
+        glb_writer(d / "scene.glb")
+        data = (d / "scene.glb").read_bytes()
+        files["scene.glb"] = {"bytes": len(data), "blake2b": file_digest(data)}
+    marker = {"format": MARKER_FORMAT, "version": 1, **meta, "points": len(sample), "files": files}
+    if isinstance(marker.get("seconds"), dict):
+        marker["seconds"] = {**marker["seconds"], "write": round(time.perf_counter() - t0, 4)}
+    write_json_atomic(d / META_NAME, marker)
+    return marker
+
+
+def read_scene_meta(scene_dir: str | Path, *, check_files: bool = True) -> dict | None:
+    """The completion marker of a scene folder, or None if the scene is absent or incomplete
+    (no marker, unreadable marker, or a listed file missing or changed)."""
+    d = Path(scene_dir)
+    try:
+        meta = json.loads((d / META_NAME).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(meta, dict) or meta.get("format") != MARKER_FORMAT or not isinstance(meta.get("files"), dict):
+        return None
+    if check_files:
+        for name, info in meta["files"].items():
+            p = d / name
+            try:
+                if p.stat().st_size != info["bytes"] or file_digest(p.read_bytes()) != info["blake2b"]:
+                    return None
+            except (OSError, KeyError, TypeError):
+                return None
+    return meta
+
+
+def load_scene_arrays(scene_dir: str | Path) -> dict[str, np.ndarray]:
+    """Load a scene folder's arrays with plain ``np.load`` and check dtypes and shapes."""
+    d = Path(scene_dir)
+    out: dict[str, np.ndarray] = {}
+    for name, (dtype, cols) in ARRAYS.items():
+        p = d / f"{name}.npy"
+        try:
+            a = np.load(p, allow_pickle=False)
+        except FileNotFoundError:
+            raise DataError(f"{p}: missing; regenerate the scene") from None
+        except (ValueError, OSError) as e:
+            raise DataError(f"{p}: unreadable ({e}); regenerate the scene") from None
+        if a.dtype != np.dtype(dtype) or (cols and (a.ndim != 2 or a.shape[1] != cols)) or (not cols and a.ndim != 1):
+            raise DataError(f"{p}: expected {dtype} {'(N, %d)' % cols if cols else '(N,)'}, got {a.dtype} {a.shape}")
+        out[name] = a
+    n = {len(a) for a in out.values()}
+    if len(n) != 1:
+        raise DataError(f"{d}: arrays disagree on the point count: { {k: len(v) for k, v in out.items()} }")
+    return out

@@ -1,0 +1,279 @@
+"""One scene end to end (select -> layout -> assemble -> render -> fuse -> write) and the
+dataset loop around it: resumable, parallel over processes, deterministic per scene.
+
+Scene ``k`` of a dataset with global seed ``S`` uses ``scene_seed(S, k)`` and ``scene_index=k``
+everywhere, so it can be regenerated alone and equals the same scene of a full run.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing as mp
+import os
+import re
+import time
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Iterable
+
+from .config import GenerateConfig, config_to_dict, dump_config
+from .errors import ConfigError
+from .export import Manifest, read_scene_meta, write_scene
+from .rng import make_rng, scene_seed
+
+log = logging.getLogger(__name__)
+
+__all__ = ["STAGES", "scene_name", "SceneJob", "Generator", "generate_dataset", "DatasetRun", "run_benchmark"]
+
+STAGES = ("select", "layout", "assemble", "render", "fuse", "write")
+_SCENE_RE = re.compile(r"^scene_(\d{6,})$")
+THREAD_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def scene_name(index: int) -> str:
+    """Folder name of scene ``index``: ``scene_000042``."""
+    return f"scene_{index:06d}"
+
+
+@dataclass(frozen=True)
+class SceneJob:
+    index: int
+    out_dir: str
+    verify: bool = False
+
+
+class Generator:
+    """Everything one process needs to generate scenes: the config and the opened catalog."""
+
+    def __init__(self, cfg: GenerateConfig, *, threads: int | None = None) -> None:
+        from .assets import class_list, open_catalog
+
+        self.cfg = cfg
+        if threads is not None:
+            self.cfg = cfg.model_copy(update={"render": cfg.render.model_copy(update={"threads": threads})})
+        a = cfg.assets
+        self.catalog = open_catalog(a.library, procedural_count=a.procedural_count, procedural_seed=a.procedural_seed)
+        self.classes = class_list(self.catalog)
+
+    @property
+    def assets_label(self) -> str:
+        return str(getattr(self.catalog, "root", "") or self.cfg.assets.library or "procedural")
+
+    def scene(self, job: SceneJob) -> dict:
+        """Generate and write scene ``job.index``; returns its completion marker."""
+        from .render import make_caster, render_point_cloud, verify_labels
+        from .scene.assemble import assemble_scene, export_glb
+        from .scene.layout import build_layout
+
+        cfg = self.cfg
+        sid = scene_name(job.index)
+        seed = scene_seed(cfg.seed, job.index)
+        seconds: dict[str, float] = {}
+        t0 = time.perf_counter()
+        layout = build_layout(self.catalog, cfg, seed, scene_index=job.index)
+        t_layout = time.perf_counter() - t0
+        groups = sum(float(v) for v in (layout.stats.get("timing") or {}).values() if isinstance(v, (int, float)))
+        seconds["select"] = round(max(0.0, t_layout - groups), 4)  # room + selection + planning overhead
+        seconds["layout"] = round(t_layout - seconds["select"], 4)
+        if not layout.classes:
+            layout = _with_classes(layout, self.classes)
+        t0 = time.perf_counter()
+        mesh = assemble_scene(layout, self.catalog, self.classes)
+        seconds["assemble"] = round(time.perf_counter() - t0, 4)
+        caster = make_caster(cfg.render.backend, mesh.vertices, mesh.faces)
+        t_bvh = time.perf_counter() - t0 - seconds["assemble"]
+        res = render_point_cloud(mesh, layout.room, cfg.render, rng=make_rng(seed, "render"), scene_id=sid,
+                                 caster=caster)
+        seconds["render"] = round(res.timings["render"] + t_bvh, 4)
+        seconds["fuse"] = res.timings["fuse"]
+        meta = {
+            "id": sid, "index": job.index, "seed": seed, "dataset_seed": cfg.seed,
+            "instances": len(layout.instances),
+            "instances_with_points": int(len(set(res.sample.instance.tolist()) - {-1})),
+            "dropped": len(layout.dropped), "planner": dict(layout.planner),
+            "vantage_points": [[round(float(v), 6) for v in c] for c in res.centers],
+            "render": res.stats, "triangles": int(len(mesh.faces)),
+        }
+        if job.verify:
+            t0 = time.perf_counter()
+            check = verify_labels(mesh, caster, res.sample, res.centers, pixel_counts=res.pixel_counts)
+            meta["check"] = {**check.to_json(), "ok": check.ok(), "seconds": round(time.perf_counter() - t0, 4)}
+            if not check.ok():
+                log.warning("%s: label check failed: %s", sid, meta["check"])
+        glb = (lambda p: export_glb(layout, self.catalog, p)) if cfg.output.save_mesh else None
+        meta["seconds"] = seconds  # write_scene adds seconds["write"] before the marker goes out
+        return write_scene(Path(job.out_dir) / sid, res.sample, layout, meta, ply=cfg.output.ply, glb_writer=glb)
+
+
+def _with_classes(layout, classes):
+    from dataclasses import replace
+
+    return replace(layout, classes=tuple(classes))
+
+
+# ------------------------------------------------------------------------------------------
+# worker processes
+# ------------------------------------------------------------------------------------------
+
+_WORKER: Generator | None = None
+
+
+def _init_worker(cfg_json: dict, threads: int) -> None:
+    global _WORKER
+    from .config import parse_config
+
+    _WORKER = Generator(parse_config(cfg_json), threads=threads)
+
+
+def _run_job(job: SceneJob) -> dict:
+    assert _WORKER is not None, "worker not initialised"
+    return _WORKER.scene(job)
+
+
+# ------------------------------------------------------------------------------------------
+# the dataset loop
+# ------------------------------------------------------------------------------------------
+
+
+@dataclass
+class DatasetRun:
+    """What :func:`generate_dataset` did."""
+
+    out: Path
+    requested: list[int]
+    skipped: list[int]
+    generated: list[dict]
+    manifest: Manifest
+    failed_checks: list[str]
+
+
+def _existing_scenes(out: Path) -> list[int]:
+    if not out.is_dir():
+        return []
+    return sorted(int(m.group(1)) for p in out.iterdir() if p.is_dir() and (m := _SCENE_RE.match(p.name)))
+
+
+def generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int], *, workers: int = 1,
+                     verify: bool = False,
+                     on_scene: Callable[[dict, bool], None] | None = None,
+                     on_start: Callable[[int, int], None] | None = None) -> DatasetRun:
+    """Generate scenes ``indices`` into ``out``; complete scenes already there are kept.
+
+    ``on_start(total, already_done)`` is called once, ``on_scene(meta, skipped)`` after every
+    scene. The resolved config is saved as ``out/config.yaml``, the manifest as
+    ``out/manifest.json`` (rewritten as scenes finish).
+    """
+    if workers < 1:
+        raise ConfigError(f"--workers must be >= 1, got {workers}")
+    out = Path(out)
+    indices = sorted(set(int(i) for i in indices))
+    if any(i < 0 for i in indices):
+        raise ConfigError("scene indices must be >= 0")
+    for var in THREAD_ENV:
+        os.environ.setdefault(var, "1")
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    threads = max(1, min(cfg.render.threads, cpus // workers)) if workers > 1 else cfg.render.threads
+    gen = Generator(cfg) if workers == 1 else None  # in-process: open the catalog once, here
+    if gen is not None:
+        classes, assets_label = gen.classes, gen.assets_label
+    else:
+        from .assets import class_list, open_catalog
+        from .scene.planners import make_planner
+
+        cat = open_catalog(cfg.assets.library, procedural_count=cfg.assets.procedural_count,
+                           procedural_seed=cfg.assets.procedural_seed)
+        classes = class_list(cat)
+        assets_label = str(getattr(cat, "root", "") or cfg.assets.library or "procedural")
+        make_planner(cfg)  # says once, here, which planner the workers use
+        del cat
+    cfg_dict = config_to_dict(cfg)
+    manifest = Manifest(out, cfg_dict, cfg.seed, classes, assets_label)
+    manifest.check_compatible()
+    out.mkdir(parents=True, exist_ok=True)
+    dump_config(cfg, out / "config.yaml")
+
+    todo: list[int] = []
+    skipped: list[int] = []
+    wanted = set(indices)
+    for i in _existing_scenes(out):
+        meta = read_scene_meta(out / scene_name(i), check_files=i in wanted)
+        ok = meta is not None and meta.get("seed") == scene_seed(cfg.seed, i)
+        if ok:
+            manifest.add(meta)
+            if i in wanted:
+                skipped.append(i)
+    for i in indices:
+        if i not in skipped:
+            todo.append(i)
+    if skipped:
+        log.info("resume: %d of %d scenes already complete in %s", len(skipped), len(indices), out)
+    manifest.write()
+    if on_start:
+        on_start(len(indices), len(skipped))
+    for i in skipped:
+        if on_scene:
+            on_scene(next(e for e in manifest.entries if e.get("index") == i), True)
+
+    generated: list[dict] = []
+    failed: list[str] = []
+
+    def done(meta: dict) -> None:
+        generated.append(meta)
+        manifest.add(meta)
+        manifest.write()
+        if verify and not meta.get("check", {}).get("ok", True):
+            failed.append(meta["id"])
+        if on_scene:
+            on_scene(meta, False)
+
+    jobs = [SceneJob(i, str(out), verify) for i in todo]
+    if gen is not None:
+        for job in jobs:
+            done(gen.scene(job))
+    elif jobs:
+        ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn")
+        with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=ctx, initializer=_init_worker,
+                                 initargs=(cfg_dict, threads)) as pool:
+            pending = {pool.submit(_run_job, j) for j in jobs}
+            while pending:
+                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for f in finished:
+                    done(f.result())
+    return DatasetRun(out, indices, skipped, generated, manifest, failed)
+
+
+def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, out: str | None = None) -> dict:
+    """Generate ``scenes`` scenes at paper settings with one worker; per-stage medians and peak
+    memory (max resident set size of this process, which includes the opened catalog).
+
+    Returns ``{"scenes", "seconds_per_scene": {"median", "max"}, "stages": {stage: median s},
+    "peak_memory_mb", ...}``. Opening (or first building) the catalog is timed separately.
+    """
+    import resource
+    import statistics
+    import tempfile
+
+    from .config import parse_config
+
+    cfg = parse_config({"seed": seed, "assets": {"library": assets}})
+    t0 = time.perf_counter()
+    gen = Generator(cfg)
+    catalog_s = time.perf_counter() - t0
+    with tempfile.TemporaryDirectory(prefix="assist3d-bench-") as tmp:
+        root = Path(out) if out else Path(tmp)
+        metas = [gen.scene(SceneJob(i, str(root))) for i in range(scenes)]
+    totals = [sum(m["seconds"].values()) for m in metas]
+    peak_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return {
+        "scenes": scenes,
+        "seconds_per_scene": {"median": round(statistics.median(totals), 4), "max": round(max(totals), 4)},
+        "stages": {s: round(statistics.median(m["seconds"].get(s, 0.0) for m in metas), 4) for s in STAGES},
+        "peak_memory_mb": round(peak_kb / 1024.0, 1),
+        "points_per_scene": statistics.median(m["points"] for m in metas),
+        "instances_per_scene": statistics.median(m["instances"] for m in metas),
+        "triangles_per_scene": statistics.median(m["triangles"] for m in metas),
+        "catalog_seconds": round(catalog_s, 3),
+        "settings": {"views": metas[0]["render"]["views"], "width": cfg.render.width, "height": cfg.render.height,
+                     "voxel_size": cfg.render.voxel_size, "backend": cfg.render.backend},
+    }

@@ -1,0 +1,77 @@
+"""A fixed voxel grid over a scene and its packed linear voxel keys.
+
+Voxel centres sit on multiples of the voxel size (the grid is offset by half a voxel from the
+origin), so walls and floors at round coordinates fall in the middle of a voxel layer instead of
+on a voxel face, where float noise would split them over two layers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import RenderError
+
+__all__ = ["VoxelGrid", "pick_one_per_voxel"]
+
+
+@dataclass(frozen=True)
+class VoxelGrid:
+    """``lo`` (3,) int64 index of the first voxel; ``dims`` (3,) int64 voxels per axis."""
+
+    size: float
+    lo: np.ndarray
+    dims: np.ndarray
+
+    @staticmethod
+    def around(bounds_min: np.ndarray, bounds_max: np.ndarray, size: float, margin: int = 2) -> "VoxelGrid":
+        lo = np.floor(np.asarray(bounds_min, np.float64) / size + 0.5).astype(np.int64) - margin
+        hi = np.floor(np.asarray(bounds_max, np.float64) / size + 0.5).astype(np.int64) + margin
+        dims = hi - lo + 1
+        if float(np.prod(dims.astype(np.float64))) >= 2.0 ** 40:
+            raise RenderError(f"voxel grid {dims.tolist()} too large for {size} m voxels; the scene spans "
+                              f"{np.round(bounds_min, 2).tolist()} to {np.round(bounds_max, 2).tolist()}")
+        return VoxelGrid(float(size), lo, dims)
+
+    @property
+    def count(self) -> int:
+        return int(np.prod(self.dims))
+
+    def keys(self, points: np.ndarray) -> np.ndarray:
+        """(N,) int64 linear voxel index of points (N, 3); points outside are clamped to the border."""
+        ijk = np.floor(points * np.float32(1.0 / self.size) + np.float32(0.5)).astype(np.int64)
+        ijk -= self.lo
+        np.clip(ijk, 0, self.dims - 1, out=ijk)
+        return (ijk[:, 0] * self.dims[1] + ijk[:, 1]) * self.dims[2] + ijk[:, 2]
+
+
+def _bits(n: int) -> int:
+    return max(1, int(n - 1).bit_length())
+
+
+def pick_one_per_voxel(keys: np.ndarray, salt: int) -> np.ndarray:
+    """Indices (sorted by voxel) of one pseudo-randomly chosen row per distinct voxel key.
+
+    keys: (N,) int64 voxel keys >= 0. The choice inside a voxel is the row whose index, XOR-ed with
+    a hash of (voxel, ``salt``), is smallest: uniform-looking, deterministic, and done with one
+    integer sort instead of an argsort.
+    """
+    n = len(keys)
+    if n == 0:
+        return np.zeros(0, np.int64)
+    rb = _bits(n)
+    if int(keys.max()).bit_length() + rb > 63:
+        raise RenderError(f"voxel keys too wide to pack with {n} rows; raise render.voxel_size")
+    mask = np.uint64((1 << rb) - 1)
+    mult = np.uint64((int(salt) | 1) & 0xFFFFFFFFFFFFFFFF)
+    h = ((keys.astype(np.uint64) * mult) >> np.uint64(29)) & mask
+    packed = (keys.astype(np.uint64) << np.uint64(rb)) | (np.arange(n, dtype=np.uint64) ^ h)
+    packed.sort()
+    vox = packed >> np.uint64(rb)
+    first = np.ones(n, dtype=bool)
+    first[1:] = vox[1:] != vox[:-1]
+    win = packed[first]
+    wvox = win >> np.uint64(rb)
+    hw = ((wvox * mult) >> np.uint64(29)) & mask
+    return ((win & mask) ^ hw).astype(np.int64)
