@@ -26,13 +26,15 @@ class Step:
     raw: bytes | None = None
     endless: bool = False  # stream bytes with no Content-Length until the client hangs up
     reject_json_mode: bool = False  # answer 400 when response_format is present
+    trickle: bool = False  # send a complete answer one byte every 0.1 s
+    finish_reason: str = "stop"
     headers: dict = field(default_factory=dict)
 
 
-def completion(content: str, prompt_tokens: int = 11, completion_tokens: int = 7) -> bytes:
+def completion(content: str, prompt_tokens: int = 11, completion_tokens: int = 7, finish_reason: str = "stop") -> bytes:
     return json.dumps({
         "id": "chatcmpl-test", "object": "chat.completion", "model": "fake",
-        "choices": [{"index": 0, "message": {"role": "assistant", "content": content}, "finish_reason": "stop"}],
+        "choices": [{"index": 0, "message": {"role": "assistant", "content": content}, "finish_reason": finish_reason}],
         "usage": {"prompt_tokens": prompt_tokens, "completion_tokens": completion_tokens,
                   "total_tokens": prompt_tokens + completion_tokens},
     }).encode()
@@ -95,14 +97,22 @@ class FakeServer:
             while time.monotonic() < t_end and not self._stop.is_set():
                 h.wfile.write(chunk)
             return
-        data = step.raw if step.raw is not None else (completion(step.content) if step.status == 200 else
-                                                      b'{"error": {"message": "scripted failure"}}')
+        data = step.raw if step.raw is not None else (
+            completion(step.content, finish_reason=step.finish_reason) if step.status == 200 else
+            b'{"error": {"message": "scripted failure"}}')
         h.send_response(step.status)
         h.send_header("Content-Type", "application/json")
         h.send_header("Content-Length", str(len(data)))
         for k, v in step.headers.items():
             h.send_header(k, v)
         h.end_headers()
+        if step.trickle:
+            for k in range(len(data)):
+                if self._stop.wait(0.1):
+                    return
+                h.wfile.write(data[k:k + 1])
+                h.wfile.flush()
+            return
         h.wfile.write(data)
 
     @property

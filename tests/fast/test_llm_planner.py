@@ -228,6 +228,23 @@ def test_stall_returns_within_timeout(secret_env, tmp_path):
     assert any("timeout_s" in n for n in plan.notes)
 
 
+def test_trickling_answer_returns_within_timeout(secret_env, tmp_path):
+    with FakeServer([Step(GOOD_FLOOR, trickle=True)]) as srv:
+        plan, elapsed = _plan(_cfg(srv, tmp_path, retries=2))
+    assert plan.planner == "rules" and elapsed < TIMEOUT + 0.5 and len(srv.requests) == 1
+
+
+def test_cut_off_answer_is_salvaged(secret_env, tmp_path):
+    cut = GOOD_FLOOR[:GOOD_FLOOR.index('{"index": 1')]  # the chair's entry was cut off
+    with FakeServer([Step(cut, finish_reason="length")]) as srv:
+        plan, _ = _plan(_cfg(srv, tmp_path))
+    assert plan.planner == f"llm:{MODEL}" and plan.stats["repairs"] == 1
+    assert "cut off at the token limit" in srv.requests[1]["json"]["messages"][-1]["content"]
+    assert [p.source for p in plan.order] == [2, 0, 1]  # two salvaged entries, the chair appended
+    assert plan.order[1].relations == (Relation("middle", None, (), True), Relation("far", 0))
+    assert any("missing from the answer" in n for n in plan.notes)
+
+
 def test_http_500_then_success(secret_env, tmp_path):
     with FakeServer([Step(status=500), Step(status=503, headers={"Retry-After": "0"}), Step(GOOD_FLOOR)]) as srv:
         plan, _ = _plan(_cfg(srv, tmp_path, retries=2))

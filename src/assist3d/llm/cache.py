@@ -39,6 +39,7 @@ class CachedAnswer:
     content: str
     prompt_tokens: int
     completion_tokens: int
+    finish_reason: str = ""  # "stop", "length" (cut off at max_tokens), ... or "" when unknown
 
 
 def default_cache_dir() -> Path:
@@ -70,7 +71,7 @@ class ResponseCache:
                 raise ValueError("key or content missing")
             usage = d.get("usage") or {}
             return CachedAnswer(d["content"], int(usage.get("prompt_tokens", 0)),
-                                int(usage.get("completion_tokens", 0)))
+                                int(usage.get("completion_tokens", 0)), str(d.get("finish_reason", "")))
         except (ValueError, TypeError, AttributeError) as e:
             log.warning("%s: corrupt cache entry (%s); ignoring it", p, e)
             return None
@@ -81,4 +82,5 @@ class ResponseCache:
             "model": model,
             "content": answer.content,
             "usage": {"prompt_tokens": answer.prompt_tokens, "completion_tokens": answer.completion_tokens},
+            "finish_reason": answer.finish_reason,
         })

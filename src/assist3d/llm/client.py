@@ -73,6 +73,7 @@ class ChatAnswer:
     cached: bool
     prompt_tokens: int
     completion_tokens: int
+    finish_reason: str = ""  # "length" means the answer was cut off at max_tokens
 
 
 class _Stall(Exception):
@@ -151,7 +152,7 @@ class ChatClient:
                 if hit is not None:
                     usage.cache_hits += 1
                     log.debug("cache hit %s (%s)", key[:12], self.model)
-                    return ChatAnswer(hit.content, True, hit.prompt_tokens, hit.completion_tokens)
+                    return ChatAnswer(hit.content, True, hit.prompt_tokens, hit.completion_tokens, hit.finish_reason)
             if self.disabled:
                 raise LLMError(f"{self.endpoint.display}: skipped, the endpoint failed "
                                f"{self.consecutive_failures} times in a row")
@@ -168,7 +169,8 @@ class ChatClient:
                 log.warning("%s: the answer contains the API key; not caching it", self.endpoint.display)
             elif use_cache:
                 self.cache.put(key, self.model,
-                               CachedAnswer(answer.content, answer.prompt_tokens, answer.completion_tokens))
+                               CachedAnswer(answer.content, answer.prompt_tokens, answer.completion_tokens,
+                                            answer.finish_reason))
             return answer
         finally:
             usage.seconds += time.monotonic() - t0
@@ -231,7 +233,8 @@ class ChatClient:
     def _parse(self, data: bytes) -> ChatAnswer:
         try:
             d = json.loads(data.decode("utf-8"))
-            msg = d["choices"][0]["message"]
+            choice = d["choices"][0]
+            msg = choice["message"]
             content = msg.get("content")
             if content is None:
                 raise ValueError("message has no content")
@@ -240,7 +243,8 @@ class ChatClient:
             if not isinstance(content, str):
                 raise ValueError(f"content is {type(content).__name__}, not text")
             u = d.get("usage") or {}
-            return ChatAnswer(content, False, int(u.get("prompt_tokens") or 0), int(u.get("completion_tokens") or 0))
+            return ChatAnswer(content, False, int(u.get("prompt_tokens") or 0), int(u.get("completion_tokens") or 0),
+                              str(choice.get("finish_reason") or ""))
         except (ValueError, KeyError, IndexError, TypeError, AttributeError, UnicodeDecodeError) as e:
             raise LLMError(f"{self.endpoint.display}: not a chat completion ({e}): {self._snippet(data)}") from None
 
@@ -332,7 +336,7 @@ class ChatClient:
                 raise LLMError(f"{self.endpoint.display}: no free request slot after {wait_s:.0f} s "
                                f"(llm.concurrency = {self.cfg.concurrency}, lock folder {self._lock_dir})")
             time.sleep(pause)
-            pause = min(pause * 2, 0.5)
+            pause = min(pause * 2, 0.1)
 
 
 _SEMAPHORES: dict[int, threading.BoundedSemaphore] = {}

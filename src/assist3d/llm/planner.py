@@ -32,9 +32,9 @@ from ..contracts import Relation
 from ..errors import ConfigError, LLMError
 from ..scene.relations import CROSS_GROUP, GroupPlan, PlannedObject, Planner, PlanRequest, validate_plan
 from .cache import ResponseCache
-from .client import ChatClient, Usage
+from .client import ChatAnswer, ChatClient, Usage
 from .prompts import render_plan_messages, render_repair_message
-from .schema import CheckedAnswer, check_answer, parse_json_text
+from .schema import CheckedAnswer, check_answer, parse_json_text, salvage_objects
 
 log = logging.getLogger(__name__)
 
@@ -63,7 +63,7 @@ class LLMPlanner:
         try:
             messages = render_plan_messages(request, self.cfg.prompt_dir)
             first = self.client.complete(messages, usage=usage)
-            checked, problems = _check(first.content, request)
+            checked, problems = _check(first, request)
             if problems:
                 repairs = 1
                 log.info("%s %s: %d problem(s) in the answer; asking for a repair: %s", self.name,
@@ -74,7 +74,7 @@ class LLMPlanner:
                 ]
                 try:
                     second = self.client.complete(repair_messages, usage=usage)
-                    checked2, problems2 = _check(second.content, request)
+                    checked2, problems2 = _check(second, request)
                 except LLMError as e:
                     if checked is None:
                         raise
@@ -121,14 +121,22 @@ class LLMPlanner:
         return GroupPlan(plan.group, plan.order, plan.planner, tuple(notes), stats)
 
 
-def _check(content: str, request: PlanRequest) -> tuple[CheckedAnswer | None, list[str]]:
-    data, err = parse_json_text(content)
+def _check(answer: ChatAnswer, request: PlanRequest) -> tuple[CheckedAnswer | None, list[str]]:
+    """The usable part of an answer (None if nothing is) and its problems, phrased for the model."""
+    cut = (["the answer was cut off at the token limit; answer more briefly (at most 2 relations per object)"]
+           if answer.finish_reason == "length" else [])
+    data, err = parse_json_text(answer.content)
     if err is not None:
-        return None, [err]
+        items = salvage_objects(answer.content)
+        if not items:
+            return None, [*cut, err]
+        checked = check_answer({"objects": items}, request)
+        return checked, [*cut, f"{err}; only the first {len(items)} complete entries could be read",
+                         *checked.problems]
     checked = check_answer(data, request)
     if not checked.usable:
-        return None, list(checked.problems)
-    return checked, list(checked.problems)
+        return None, [*cut, *checked.problems]
+    return checked, [*cut, *checked.problems]
 
 
 def _append_missing(order: list[PlannedObject], missing: tuple[int, ...], request: PlanRequest,

@@ -80,6 +80,30 @@ def parse_json_text(text: str) -> tuple[Any | None, str | None]:
         return None, f"the answer is not valid JSON ({e.msg} at line {e.lineno} column {e.colno})"
 
 
+_OBJECTS_KEY = re.compile(r'"objects"\s*:\s*\[')
+
+
+def salvage_objects(text: str) -> list[Any]:
+    """The complete entries at the start of the ``"objects"`` list of a broken answer (typically
+    one cut off at the token limit); empty when there are none. Decoded with ``raw_decode`` only."""
+    m = _OBJECTS_KEY.search(text)
+    if m is None:
+        return []
+    dec = json.JSONDecoder()
+    items: list[Any] = []
+    pos = m.end()
+    while True:
+        while pos < len(text) and text[pos] in " \t\r\n,":
+            pos += 1
+        if pos >= len(text) or text[pos] != "{":
+            return items
+        try:
+            item, pos = dec.raw_decode(text, pos)
+        except json.JSONDecodeError:
+            return items
+        items.append(item)
+
+
 @dataclass(frozen=True)
 class CheckedAnswer:
     """The usable part of an answer and every problem found (phrased for the model).
