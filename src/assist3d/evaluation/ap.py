@@ -23,7 +23,7 @@ Rules (ScanNet ``evaluate_semantic_instance.py``, with one class "object"):
   the mean over the nine thresholds, AR50 and AR25 the single ones.
 
 The intersections between all GT objects and all predictions of a scene come from one sparse
-product (a ``bincount`` over the predictions' non-zero entries), so a scene costs O(mask points).
+product (one ``bincount`` over the masks' non-zero entries): one pass over the masks per scene.
 """
 
 from __future__ import annotations
@@ -145,17 +145,23 @@ def match_scene(
     gt_size = np.bincount(gt_col, minlength=g_all + 1)[:g_all]
     big = gt_size >= min_region_size
 
+    # Intersections of every prediction with every GT object and void: the sparse product
+    # masks (M, N) x one-hot(gt_col) (N, G + 1), as one bincount over the masks' non-zeros.
+    n_valid = masks.shape[1]
+    flat = np.flatnonzero(masks)
+    rows = flat // n_valid
+    cols = flat - rows * n_valid
+    inter_all = np.bincount(rows * (g_all + 1) + gt_col[cols], minlength=len(masks) * (g_all + 1))
+    inter_all = inter_all.reshape(len(masks), g_all + 1)
+
     # Predictions: drop small ones, order by score (stable: ties keep file order).
-    pred_size_all = masks.sum(axis=1)
+    pred_size_all = inter_all.sum(axis=1)
     keep = np.flatnonzero(pred_size_all >= min_region_size)
     keep = keep[np.argsort(-scores[keep], kind="stable")]
-    masks_k = masks[keep]
     score_k = scores[keep]
     pred_size = pred_size_all[keep]
+    inter = inter_all[keep]
     m = len(keep)
-
-    rows, cols = np.nonzero(masks_k)
-    inter = np.bincount(rows * (g_all + 1) + gt_col[cols], minlength=m * (g_all + 1)).reshape(m, g_all + 1)
     inter_gt = inter[:, :g_all]
     ignore_pts = inter[:, g_all] + inter_gt[:, ~big].sum(axis=1)
     union = gt_size[None, :] + pred_size[:, None] - inter_gt
