@@ -104,9 +104,22 @@ def render_views(scene_mesh: SceneMesh, n: int = 4, size: int = 512) -> list[byt
     return out
 
 
+def point_spacing(coord: np.ndarray, sample: int = 2000) -> float:
+    """Median nearest-neighbour distance of a point cloud (coord (N, 3)), from a fixed subsample."""
+    from scipy.spatial import cKDTree
+
+    if len(coord) < 2:
+        return 0.02
+    pick = np.linspace(0, len(coord) - 1, min(sample, len(coord))).astype(np.int64)
+    dist, _ = cKDTree(coord).query(coord[pick], k=2)
+    return float(max(np.median(dist[:, 1]), 1e-3))
+
+
 def render_point_views(coord: np.ndarray, color: np.ndarray, n: int = 4, size: int = 512) -> list[bytes]:
-    """``n`` PNG views of a point cloud: coord (N, 3) float, color (N, 3) uint8; each point is a
-    3 x 3 pixel splat, nearest wins, darkened slightly with distance."""
+    """``n`` PNG views of a point cloud: coord (N, 3) float, color (N, 3) uint8.
+
+    Each point is a square splat sized to cover the point spacing at its depth (3 or 5 px
+    across at most), the nearest point wins every pixel, colours darken slightly with distance."""
     if coord.ndim != 2 or coord.shape[1] != 3 or color.shape != coord.shape:
         raise ValueError(f"render_point_views: expected coord and color of shape (N, 3), got {coord.shape}, "
                          f"{color.shape}")
@@ -115,10 +128,9 @@ def render_point_views(coord: np.ndarray, color: np.ndarray, n: int = 4, size: i
     p = coord.astype(np.float64)
     lo, hi = np.percentile(p, 0.5, axis=0), np.percentile(p, 99.5, axis=0)
     eyes, target = camera_positions(lo[:2], hi[:2], float(lo[2]), max(float(hi[2] - lo[2]), 2.0), n)
-    t = np.tan(np.radians(FOV_DEG) / 2)
-    focal = size / 2 / t
+    focal = size / 2 / np.tan(np.radians(FOV_DEG) / 2)
+    spacing = point_spacing(p)
     col = color.astype(np.float32)
-    offsets = np.array([(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1)])
     out = []
     for eye in eyes:
         cam = (p - eye) @ _camera_axes(eye, target).T
@@ -127,13 +139,20 @@ def render_point_views(coord: np.ndarray, color: np.ndarray, n: int = 4, size: i
         px = np.floor(cam[front, 0] / z * focal + size / 2).astype(np.int64)
         py = np.floor(cam[front, 1] / z * focal + size / 2).astype(np.int64)
         c = col[front] * np.clip(1.05 - 0.04 * z, 0.6, 1.0)[:, None]
-        sx = (px[:, None] + offsets[None, :, 1]).ravel()
-        sy = (py[:, None] + offsets[None, :, 0]).ravel()
-        sz = np.repeat(z, len(offsets))
-        inside = (sx >= 0) & (sx < size) & (sy >= 0) & (sy < size)
-        pix = (sy * size + sx)[inside]
-        idx = np.repeat(np.arange(len(z)), len(offsets))[inside]
-        order = np.lexsort((sz[inside], pix))
+        radius = np.clip(np.ceil(0.5 * spacing * focal / z - 0.5), 1, 2).astype(np.int64)
+        pix_parts, idx_parts, z_parts = [], [], []
+        for r in np.unique(radius):  # a few splat sizes, each vectorised over its points
+            sel = np.nonzero(radius == r)[0]
+            d = np.arange(-r, r + 1)
+            dy, dx = (a.ravel() for a in np.meshgrid(d, d, indexing="ij"))
+            sx = (px[sel, None] + dx[None]).ravel()
+            sy = (py[sel, None] + dy[None]).ravel()
+            inside = (sx >= 0) & (sx < size) & (sy >= 0) & (sy < size)
+            pix_parts.append((sy * size + sx)[inside])
+            idx_parts.append(np.repeat(sel, len(dx))[inside])
+            z_parts.append(np.repeat(z[sel], len(dx))[inside])
+        pix, idx, sz = np.concatenate(pix_parts), np.concatenate(idx_parts), np.concatenate(z_parts)
+        order = np.lexsort((idx, sz, pix))
         first = np.unique(pix[order], return_index=True)[1]
         img = np.broadcast_to(BACKGROUND, (size * size, 3)).copy()
         img[pix[order][first]] = c[idx[order][first]]
