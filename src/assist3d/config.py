@@ -72,6 +72,9 @@ class SelectionConfig(_Section):
                                                                       "near-identical models does not dominate); "
                                                                       "'asset': uniform over assets (paper: "
                                                                       "uniform, unspecified).")
+    on_top_fit: bool = Field(True, description="Draw a support's K on-top assets only among those whose box fits "
+                                               "one of its surfaces (footprint, either way round, and clearance); "
+                                               "paper: unspecified. False = the whole on-top pool.")
 
 
 class LayoutConfig(_Section):

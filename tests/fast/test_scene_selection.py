@@ -21,7 +21,7 @@ SUPPORTED = {"table", "nightstand", "coffee table", "gizmo"}
 def _rec(cls: str, group: str, i: int, cluster: int | None) -> AssetRecord:
     sup = (SupportSurface(0.7, ((-0.3, -0.3), (0.3, -0.3), (0.3, 0.3), (-0.3, 0.3))),) if cls in SUPPORTED else ()
     return AssetRecord(id=f"t:{cls}/{i}", source="test", name=cls, class_name=cls, groups=(group,),
-                       size=(0.8, 0.6, 0.7), supports=sup, cluster=cluster)
+                       size=(0.2, 0.15, 0.1) if group == "obj" else (0.8, 0.6, 0.7), supports=sup, cluster=cluster)
 
 
 def _catalog(tmp_path, per_class: int = 3, clusters: bool = True, widget_heavy: int = 0) -> Catalog:
@@ -142,3 +142,18 @@ def test_class_lists_and_synonyms(tmp_path):
     assert mine.classes == ("sofa", "lamp") and mine.match("couch") == "sofa" and mine.match("floor lamp") == "lamp"
     with pytest.raises(ConfigError, match="neither"):
         resolve_class_list(str(tmp_path / "missing.txt"))
+
+
+def test_on_top_draws_fit_their_support(tmp_path):
+    recs = [_rec("table", "floor", 0, None)]  # support 0.6 x 0.6, unbounded clearance
+    big = AssetRecord(id="t:tv/0", source="test", name="tv", class_name="tv", groups=("obj",), size=(1.2, 0.2, 0.7))
+    small = AssetRecord(id="t:cup/0", source="test", name="cup", class_name="cup", groups=("obj",),
+                        size=(0.1, 0.1, 0.1))
+    long_ = AssetRecord(id="t:ruler/0", source="test", name="ruler", class_name="ruler", groups=("obj",),
+                        size=(0.1, 0.55, 0.02))
+    cat = Catalog(tmp_path / "fit", recs + [big, small, long_])
+    sel = _sel(cat, floor_count=5, wall_count=0, on_top_count=4)
+    drawn = {r.id for items in sel.floor_on_top for r in items}
+    assert drawn == {"t:cup/0", "t:ruler/0"}
+    sel = _sel(cat, floor_count=5, wall_count=0, on_top_count=4, on_top_fit=False)
+    assert "t:tv/0" in {r.id for items in sel.floor_on_top for r in items}

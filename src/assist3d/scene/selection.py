@@ -12,6 +12,10 @@ selected object that has a support surface. Two strategies alternate between sce
 ``sampling: asset`` draws uniformly over assets instead. Within a scene assets are drawn without
 replacement until a class (or the pool) runs out, then with replacement.
 
+On-top draws for a support are, by default (``on_top_fit``), taken among the on-top assets whose
+box fits one of its surfaces (footprint either way round, height under the clearance): a drawer
+cannot hold a television, and drawing one only to drop it wastes the search budget.
+
 Ablation controls: ``pairing_prob`` q co-selects each drawn class's partner class, ``clusters``
 keeps only some shape clusters, ``allowed_classes`` and ``max_classes`` restrict the class pool.
 """
@@ -158,13 +162,13 @@ def partner_map(classes: tuple[str, ...], class_pool_seed: int, key: str) -> dic
 
 
 class _Drawer:
-    """Draws from one group's pool with the scene's strategy, pairing and bookkeeping."""
+    """Draws from one pool with the scene's strategy, pairing and bookkeeping."""
 
-    def __init__(self, pool: _Pool, real: _Pool | None, cfg: SelectionConfig, complementary: bool, key: str,
-                 stats: dict):
+    def __init__(self, pool: _Pool, real: _Pool | None, cfg: SelectionConfig, complementary: bool,
+                 partners: dict[str, str], used: set[str], stats: dict):
         self.pool, self.real, self.cfg, self.complementary, self.stats = pool, real, cfg, complementary, stats
-        self.partners = partner_map(pool.classes, cfg.class_pool_seed, key) if cfg.pairing_prob > 0 else {}
-        self.used: set[str] = set()
+        self.partners = {c: p for c, p in partners.items() if p in pool.by_class}
+        self.used = used
 
     def draw(self, n: int, rng: np.random.Generator) -> list[AssetRecord]:
         out: list[AssetRecord] = []
@@ -184,6 +188,22 @@ class _Drawer:
         return out
 
 
+def fits_support_mask(parent: AssetRecord, sizes: np.ndarray) -> np.ndarray:
+    """(n,) bool: which boxes (``sizes`` (n, 3) float64, w x d x h) fit on one of ``parent``'s support
+    surfaces: footprint within the surface's bounding box either way round, height within its
+    clearance."""
+    mask = np.zeros(len(sizes), dtype=bool)
+    for s in parent.supports:
+        poly = np.asarray(s.polygon, dtype=np.float64)
+        if len(poly) < 3:
+            continue
+        ew, ed = poly.max(0) - poly.min(0)
+        tall = np.inf if s.clearance is None else float(s.clearance)
+        w, d, h = sizes[:, 0], sizes[:, 1], sizes[:, 2]
+        mask |= (((w <= ew) & (d <= ed)) | ((d <= ew) & (w <= ed))) & (h <= tall)
+    return mask
+
+
 def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Generator, *, scene_index: int) -> Selection:
     """Select the assets of one scene.
 
@@ -201,16 +221,23 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
                           f"(allowed_classes={cfg.allowed_classes}, clusters={cfg.clusters}, "
                           f"max_classes={cfg.max_classes}); the catalog has {len(catalog.group('floor'))} floor "
                           f"assets in all")
-    drawers: dict[str, _Drawer] = {}
-    for g, pool in pools.items():
-        real = None
-        if classes is not None:
-            real = _Pool(tuple(r for r in pool.records if classes.match(r.class_name) is not None))
-            if pool and not real:
-                log.warning("selection: no %s asset matches the %s classes; complementary draws use the whole pool",
-                            g, classes.name)
-        drawers[g] = _Drawer(pool, real, cfg, complementary, g, stats)
+    used: set[str] = set()
+    partners = {g: partner_map(pool.classes, cfg.class_pool_seed, g) if cfg.pairing_prob > 0 else {}
+                for g, pool in pools.items()}
 
+    def real_of(pool: _Pool, g: str) -> _Pool | None:
+        if classes is None:
+            return None
+        real = _Pool(tuple(r for r in pool.records if classes.match(r.class_name) is not None))
+        if pool and not real and g in ("floor", "wall", "obj"):
+            log.warning("selection: no %s asset matches the %s classes; complementary draws use the whole pool",
+                        g, classes.name)
+        return real
+
+    drawers = {g: _Drawer(pool, real_of(pool, g), cfg, complementary, partners[g], used, stats)
+               for g, pool in pools.items()}
+    obj_sizes = np.array([r.size for r in pools["obj"].records], dtype=np.float64).reshape(-1, 3)
+    fit_drawers: dict[str, _Drawer | None] = {}
     warned: set[str] = set()
 
     def group_draw(g: str, n: int) -> list[AssetRecord]:
@@ -223,8 +250,25 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
             return []
         return drawers[g].draw(n, rng)
 
+    def on_top_draw(parent: AssetRecord) -> tuple[AssetRecord, ...]:
+        if not parent.supports or cfg.on_top_count <= 0:
+            return ()
+        if not cfg.on_top_fit:
+            return tuple(group_draw("obj", cfg.on_top_count))
+        if parent.id not in fit_drawers:
+            mask = fits_support_mask(parent, obj_sizes)
+            sub = _Pool(tuple(r for r, m in zip(pools["obj"].records, mask) if m))
+            fit_drawers[parent.id] = (_Drawer(sub, real_of(sub, "fit"), cfg, complementary, partners["obj"], used,
+                                              stats) if sub else None)
+        drawer = fit_drawers[parent.id]
+        if drawer is None:
+            stats["no_fitting_on_top"] += 1
+            return ()
+        return tuple(drawer.draw(cfg.on_top_count, rng))
+
+    stats["no_fitting_on_top"] = 0
     floor = group_draw("floor", cfg.floor_count)
     wall = group_draw("wall", cfg.wall_count)
-    floor_on_top = tuple(tuple(group_draw("obj", cfg.on_top_count)) if r.supports else () for r in floor)
-    wall_on_top = tuple(tuple(group_draw("obj", cfg.on_top_count)) if r.supports else () for r in wall)
+    floor_on_top = tuple(on_top_draw(r) for r in floor)
+    wall_on_top = tuple(on_top_draw(r) for r in wall)
     return Selection(tuple(floor), tuple(wall), floor_on_top, wall_on_top, complementary, stats)
