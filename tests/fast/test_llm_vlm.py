@@ -165,3 +165,17 @@ def test_vlm_layout_score_of_a_scene_folder(secret_env, tmp_path):
     (scene / "color.npy").write_bytes(b"garbage")
     with pytest.raises(DataError, match="color.npy"):
         vlm_layout_score(scene, _cfg(srv, tmp_path))
+
+
+def test_cameras_stay_inside_an_l_shaped_room():
+    from shapely.geometry import Point, Polygon
+
+    from assist3d.llm.views import camera_positions
+
+    poly = Polygon([(0, 0), (6, 0), (6, 4), (3, 4), (3, 6), (0, 6)])
+    inside = lambda xy: np.array([poly.contains(Point(*p)) for p in xy])  # noqa: E731
+    eyes, target = camera_positions(np.array([0.0, 0.0]), np.array([6.0, 6.0]), 0.0, 2.7, 6, inside)
+    assert all(poly.contains(Point(*e[:2])) for e in eyes)
+    assert np.allclose(eyes[:, 2], 0.85 * 2.7) and np.allclose(target, [3.0, 3.0, 0.54])
+    # the notch corner (6, 6) moved in; the free corner (0, 0) kept its 12 % inset
+    assert np.allclose(eyes[0, :2], [0.36, 0.36]) and eyes[1, 0] <= 4.5 and poly.contains(Point(*eyes[1, :2]))

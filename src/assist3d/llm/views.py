@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import struct
 import zlib
+from typing import Callable
 
 import numpy as np
 
@@ -36,17 +37,25 @@ def encode_png(image: np.ndarray) -> bytes:
             + chunk(b"IEND", b""))
 
 
-def camera_positions(xy_min: np.ndarray, xy_max: np.ndarray, floor_z: float, height: float,
-                     n: int) -> tuple[np.ndarray, np.ndarray]:
+def camera_positions(xy_min: np.ndarray, xy_max: np.ndarray, floor_z: float, height: float, n: int,
+                     inside: Callable[[np.ndarray], np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(n, 3) eye positions near the corners of the box (diagonal pairs first, then wall
-    midpoints) and the (3,) point they look at."""
+    midpoints) and the (3,) point they look at.
+
+    ``inside(xy (m, 2)) -> (m,) bool`` tells which spots are in the room; a spot outside (the
+    notch of an L-shaped room) moves towards the centre until it is inside."""
     lo, hi = np.asarray(xy_min, np.float64), np.asarray(xy_max, np.float64)
     c = 0.5 * (lo + hi)
     spots = np.array([[lo[0], lo[1]], [hi[0], hi[1]], [hi[0], lo[1]], [lo[0], hi[1]],
                       [c[0], lo[1]], [c[0], hi[1]], [lo[0], c[1]], [hi[0], c[1]]])
     spots = spots[np.arange(n) % len(spots)]
-    inset = 0.12 + 0.1 * (np.arange(n) // len(spots))  # repeated spots move further in
-    xy = spots + (c - spots) * inset[:, None]
+    base = 0.12 + 0.1 * (np.arange(n) // len(spots))  # repeated spots move further in
+    steps = np.array([0.0, 0.15, 0.3, 0.45, 0.6, 0.75])
+    inset = np.minimum(base[:, None] + steps[None], 1.0)  # (n, k) candidates per eye, outermost first
+    cand = spots[:, None] + (c - spots)[:, None] * inset[..., None]
+    ok = np.ones(inset.shape, bool) if inside is None else inside(cand.reshape(-1, 2)).reshape(inset.shape)
+    ok[:, -1] |= ~ok.any(1)  # nothing inside: the innermost candidate
+    xy = cand[np.arange(n), ok.argmax(1)]
     eye_z = floor_z + min(0.85 * height, max(height - 0.25, 0.5 * height))
     eyes = np.column_stack([xy, np.full(n, eye_z)])
     target = np.array([c[0], c[1], floor_z + 0.2 * height])
@@ -88,8 +97,13 @@ def render_views(scene_mesh: SceneMesh, n: int = 4, size: int = 512) -> list[byt
     pts = v[f[floor_faces].ravel()] if floor_faces.any() else v
     floor_z = float(pts[:, 2].min())
     height = float(v[:, 2].max()) - floor_z
-    eyes, target = camera_positions(pts[:, :2].min(0), pts[:, :2].max(0), floor_z, max(height, 2.0), n)
     mesh = trimesh.Trimesh(v, f, process=False)
+
+    def inside(xy: np.ndarray) -> np.ndarray:  # floor (or furniture) below the spot, from under the ceiling
+        origins = np.column_stack([xy, np.full(len(xy), floor_z + 0.9 * max(height, 0.5))])
+        return mesh.ray.intersects_first(origins, np.tile([0.0, 0.0, -1.0], (len(xy), 1))) >= 0
+
+    eyes, target = camera_positions(pts[:, :2].min(0), pts[:, :2].max(0), floor_z, max(height, 2.0), n, inside)
     normals = np.asarray(mesh.face_normals, np.float64)
     colors = scene_mesh.face_colors.astype(np.float32)
     out = []
@@ -127,7 +141,14 @@ def render_point_views(coord: np.ndarray, color: np.ndarray, n: int = 4, size: i
         raise RenderError("render_point_views: no points")
     p = coord.astype(np.float64)
     lo, hi = np.percentile(p, 0.5, axis=0), np.percentile(p, 99.5, axis=0)
-    eyes, target = camera_positions(lo[:2], hi[:2], float(lo[2]), max(float(hi[2] - lo[2]), 2.0), n)
+    cell = 0.25
+    occupied = {tuple(k) for k in np.unique(np.floor(p[:, :2] / cell).astype(np.int64), axis=0)}
+
+    def inside(xy: np.ndarray) -> np.ndarray:  # points in the spot's 0.25 m column
+        keys = np.floor(xy / cell).astype(np.int64)
+        return np.array([tuple(k) in occupied for k in keys], dtype=bool)
+
+    eyes, target = camera_positions(lo[:2], hi[:2], float(lo[2]), max(float(hi[2] - lo[2]), 2.0), n, inside)
     focal = size / 2 / np.tan(np.radians(FOV_DEG) / 2)
     spacing = point_spacing(p)
     col = color.astype(np.float32)
