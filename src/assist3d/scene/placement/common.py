@@ -1,0 +1,190 @@
+"""Plan resolution and the relation bookkeeping shared by the floor, wall and on-top problems."""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...contracts import AssetRecord, PlacedInstance, Relation
+from ..geometry import pose_xyz_yaw
+from ..relations import CROSS_GROUP, RELATIONS, GroupPlan, PlanRequest, group_kind
+from .scoring import SATISFIED, Candidates, TargetBox, relation_score
+from .search import Choice
+
+log = logging.getLogger(__name__)
+
+# Weight of the layout prior (walls behind objects, eye-level wall items...) next to the mean
+# relation score; it only separates candidates the relations rate alike.
+PRIOR_WEIGHT = 0.25
+
+
+@dataclass(frozen=True)
+class Item:
+    """One object to place: its record, its resolved relations and, if it can never be placed,
+    why. Relation targets of in-group kinds are item indices; CROSS_GROUP targets are instance ids."""
+
+    record: AssetRecord
+    relations: tuple[Relation, ...]
+    forced_reason: str | None = None
+
+
+def resolve_plan(request: PlanRequest, plan: GroupPlan) -> tuple[list[Item], list[str]]:
+    """Turn a plan into items, repairing what is malformed instead of failing.
+
+    Entries with an out-of-range or repeated source are ignored; objects the plan forgot are
+    appended without relations. A relation with an unknown kind, a target that is not an earlier
+    object or not a placed instance, or the wrong number of values is dropped when soft; when
+    hard, the object cannot be placed and is dropped with that reason. Returns the items and
+    notes describing every repair.
+    """
+    notes: list[str] = []
+    kind = group_kind(request.group)
+    placed_ids = {p.id for p in request.placed} | ({request.support.id} if request.support else set())
+    pos_to_item: dict[int, int] = {}
+    items: list[Item] = []
+    seen: set[int] = set()
+    for pos, po in enumerate(plan.order):
+        if not 0 <= po.source < len(request.objects) or po.source in seen:
+            notes.append(f"plan position {pos}: object index {po.source} invalid or repeated; ignored")
+            continue
+        seen.add(po.source)
+        rec = request.objects[po.source]
+        rels: list[Relation] = []
+        forced: str | None = None
+        for r in po.relations:
+            problem = _relation_problem(r, kind, pos, pos_to_item, placed_ids)
+            if problem is None:
+                target = r.target
+                if RELATIONS[r.kind].needs_target and r.kind not in CROSS_GROUP:
+                    target = pos_to_item[int(r.target)]  # type: ignore[arg-type]
+                rels.append(Relation(r.kind, target, tuple(r.value), r.hard))
+            elif r.hard:
+                forced = f"hard relation {r.kind}({r.target}) cannot be used: {problem}"
+                notes.append(f"{rec.id}: {forced}")
+            else:
+                notes.append(f"{rec.id}: soft relation {r.kind}({r.target}) ignored: {problem}")
+        pos_to_item[pos] = len(items)
+        items.append(Item(rec, tuple(rels), forced))
+    for i, rec in enumerate(request.objects):
+        if i not in seen:
+            notes.append(f"{rec.id}: missing from the plan; appended without relations")
+            items.append(Item(rec, ()))
+    for note in notes:
+        log.debug("%s: %s", request.group, note)
+    return items, notes
+
+
+def _relation_problem(r: Relation, kind: str, pos: int, pos_to_item: dict[int, int], placed_ids: set[int]) -> str | None:
+    spec = RELATIONS.get(r.kind)
+    if spec is None:
+        return "unknown relation kind"
+    if kind not in spec.groups:
+        return f"not allowed for {kind} objects"
+    if len(r.value) != spec.values:
+        return f"needs {spec.values} value(s), got {len(r.value)}"
+    if r.kind == "height" and not (r.value[0] <= r.value[1]):
+        return f"empty height range {r.value}"
+    if spec.needs_target:
+        if r.target is None:
+            return "no target"
+        if r.kind in CROSS_GROUP:
+            if r.target not in placed_ids:
+                return f"target {r.target} is not a placed instance"
+        elif not (0 <= r.target < pos) or r.target not in pos_to_item:
+            return f"target {r.target} is not an earlier object of the plan"
+    return None
+
+
+def target_box(inst: PlacedInstance, size: tuple[float, float, float]) -> TargetBox:
+    x, y, z, yaw = pose_xyz_yaw(inst.pose)
+    return TargetBox(x, y, yaw, float(size[0]), float(size[1]), z, z + float(size[2]))
+
+
+class RelationState:
+    """Scores candidates against an item's relations given the items placed so far."""
+
+    def __init__(self, items: list[Item], cross: dict[int, TargetBox]):
+        self.items = items
+        self.cross = cross  # instance id -> box, for CROSS_GROUP targets
+        self.boxes: dict[int, TargetBox] = {}  # item index -> box while placed
+
+    def place(self, k: int, choice: Choice) -> None:
+        w, d, h = self.items[k].record.size
+        self.boxes[k] = TargetBox(choice.x, choice.y, choice.yaw, float(w), float(d), choice.z, choice.z + float(h))
+
+    def remove(self, k: int) -> None:
+        self.boxes.pop(k, None)
+
+    def evaluate(self, k: int, c: Candidates) -> tuple[np.ndarray, np.ndarray, str]:
+        """(scores (n,), hard_ok (n,) bool, description of the hard relations) for item ``k``.
+
+        The score is the mean over the item's relations (targets not placed are left out);
+        1.0 when none applies.
+        """
+        n = len(c)
+        total = np.zeros(n)
+        count = 0
+        ok = np.ones(n, dtype=bool)
+        hard: list[str] = []
+        for r in self.items[k].relations:
+            spec = RELATIONS[r.kind]
+            tgt: TargetBox | None = None
+            if spec.needs_target:
+                tgt = self.cross.get(int(r.target)) if r.kind in CROSS_GROUP else self.boxes.get(int(r.target))  # type: ignore[arg-type]
+                if tgt is None:
+                    continue  # the target was dropped: nothing to relate to
+            s = relation_score(r.kind, c, tgt, r.value)
+            total += s
+            count += 1
+            if r.hard:
+                ok &= s >= SATISFIED
+                hard.append(f"{r.kind}({r.target})")
+        scores = total / count if count else np.ones(n)
+        return scores, ok, ", ".join(hard)
+
+
+def order_candidates(c: Candidates, rank: np.ndarray, score: np.ndarray, rng: np.random.Generator,
+                     max_branch: int, spread: float) -> list[Choice]:
+    """The best candidate first, then up to ``max_branch - 1`` alternatives, each at least
+    ``spread`` metres (or a different yaw) away from those already chosen, so that backtracking
+    tries genuinely different positions. Candidates are ordered by ``rank`` (relation score plus
+    layout prior), ties broken by a seeded random key; ``score`` (the relation score alone) is
+    what the choice carries."""
+    n = len(c)
+    if n == 0:
+        return []
+    key = rng.random(n)
+    order = np.lexsort((key, -np.round(rank, 9)))
+    out: list[int] = [int(order[0])]
+    if max_branch > 1 and n > 1:
+        xs, ys, yaws = c.x[order], c.y[order], c.yaw[order]
+        keep = np.ones(n, dtype=bool)
+        keep[0] = False
+        for _ in range(max_branch - 1):
+            j = out[-1]
+            same_yaw = np.abs(np.angle(np.exp(1j * (yaws - c.yaw[j])))) < 1e-3
+            close = (np.hypot(xs - c.x[j], ys - c.y[j]) < spread) & same_yaw
+            keep &= ~close
+            nxt = np.flatnonzero(keep)
+            if len(nxt) == 0:
+                break
+            out.append(int(order[nxt[0]]))
+            keep[nxt[0]] = False
+    return [Choice(float(c.x[i]), float(c.y[i]), float(c.yaw[i]), float(c.z[i]), float(score[i])) for i in out]
+
+
+def relations_for_instance(item: Item, item_ids: dict[int, int]) -> tuple[Relation, ...]:
+    """The item's relations with in-group targets turned into instance ids (relations whose
+    target was dropped are left out)."""
+    out: list[Relation] = []
+    for r in item.relations:
+        if RELATIONS[r.kind].needs_target and r.kind not in CROSS_GROUP:
+            tid = item_ids.get(int(r.target))  # type: ignore[arg-type]
+            if tid is None:
+                continue
+            out.append(Relation(r.kind, tid, r.value, r.hard))
+        else:
+            out.append(r)
+    return tuple(out)
