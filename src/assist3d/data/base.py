@@ -100,13 +100,6 @@ def read_npy(path: Path, *, mmap: bool = False) -> np.ndarray:
         raise DataError(f"{path}: cannot load .npy ({e})") from None
 
 
-def seg_indices_to_points(path: Path, seg_indices: np.ndarray, n_points: int) -> np.ndarray:
-    """Validate a per-vertex segment id array against the mesh's vertex count."""
-    if seg_indices.ndim != 1 or len(seg_indices) != n_points:
-        raise DataError(f"{path}: {len(seg_indices)} segment indices for a mesh of {n_points} vertices")
-    return seg_indices
-
-
 def instances_from_groups(
     path: Path,
     seg_indices: np.ndarray,
