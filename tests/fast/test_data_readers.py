@@ -259,3 +259,18 @@ def test_specs():
     assert parse_spec("scannet:/a/b?labels=/c.tsv") == ("scannet", Path("/a/b"), {"labels": "/c.tsv"})
     with pytest.raises(DataError, match="not found"):
         open_dataset("s3dis:/nonexistent/s3dis")
+
+
+def test_ply_big_endian(tmp_path):
+    v = np.zeros(2, dtype=[("x", ">f4"), ("y", ">f4"), ("z", ">f4"), ("red", "u1"), ("green", "u1"), ("blue", "u1")])
+    v["x"], v["red"] = [1.5, 2.5], [10, 20]
+    f = np.zeros(1, dtype=[("n", "u1"), ("i", ">i4", (3,))])
+    f["n"], f["i"] = 3, [0, 1, 1]
+    header = ("ply\nformat binary_big_endian 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+              "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+              "element face 1\nproperty list uchar int vertex_indices\nend_header\n").encode()
+    p = tmp_path / "b.ply"
+    p.write_bytes(header + v.tobytes() + f.tobytes())
+    mesh = read_ply(p, faces=True)
+    assert mesh.xyz()[:, 0].tolist() == [1.5, 2.5] and mesh.rgb()[:, 0].tolist() == [10, 20]
+    assert mesh.faces.tolist() == [[0, 1, 1]]
