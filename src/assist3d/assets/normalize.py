@@ -108,7 +108,9 @@ def validate_mesh(vertices: np.ndarray, faces: np.ndarray, *, min_extent: float 
         return "empty mesh: no triangles"
     if f.min() < 0 or f.max() >= len(v):
         return f"corrupt mesh: face index out of range (0..{len(v) - 1})"
-    used = v[np.unique(f)]
+    mask = np.zeros(len(v), dtype=bool)
+    mask[f.ravel()] = True
+    used = v[mask]
     if not np.all(np.isfinite(used)):
         bad = int((~np.isfinite(used).all(1)).sum())
         return f"invalid mesh: {bad} vertices are NaN or infinite"
@@ -270,8 +272,10 @@ def compact(vertices: np.ndarray, faces: np.ndarray, colors: np.ndarray) -> tupl
     """Drop unreferenced vertices and faces with a repeated vertex index (zero-area by index)."""
     keep = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
     faces, colors = faces[keep], colors[keep]
-    used, inverse = np.unique(faces, return_inverse=True)
-    return vertices[used], inverse.reshape(-1, 3), colors
+    used = np.zeros(len(vertices), dtype=bool)
+    used[faces.ravel()] = True
+    remap = np.cumsum(used) - 1
+    return vertices[used], remap[faces], colors
 
 
 @dataclass(frozen=True)
@@ -319,7 +323,12 @@ def _clearance(polygon, tri: np.ndarray, zmin_face: np.ndarray, above: np.ndarra
 
     if len(above) == 0:
         return None
+    x0, y0, x1, y1 = polygon.bounds
     t = tri[above][:, :, :2]
+    near = (t[:, :, 0].max(1) > x0) & (t[:, :, 0].min(1) < x1) & (t[:, :, 1].max(1) > y0) & (t[:, :, 1].min(1) < y1)
+    above, t = above[near], t[near]
+    if len(above) == 0:
+        return None
     pts = np.concatenate([t, t.mean(axis=1, keepdims=True)], axis=1).reshape(-1, 2)
     inside = shapely.contains_xy(polygon, pts[:, 0], pts[:, 1]).reshape(-1, 4).any(1)
     if not inside.any():
@@ -372,7 +381,7 @@ def extract_supports(mesh: MeshData, *, min_area: float = 0.01, min_height: floa
         faces_c = order[s:e]
         height = float(np.average(zc[faces_c], weights=area[faces_c]))
         polys = shapely.polygons(tri[faces_c][:, :, :2])
-        merged = shapely.union_all(polys, grid_size=1e-4)
+        merged = shapely.union_all(polys)
         parts = [merged] if merged.geom_type == "Polygon" else list(getattr(merged, "geoms", []))
         above = np.nonzero(zmin_face > height + height_tol)[0]
         for part in parts:
