@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...contracts import AssetRecord, MeshData
+from ...contracts import AssetRecord, MeshData, SupportSurface
 from ...errors import AssetError
 from ..catalog import Catalog
 from . import abstract, appliances, seating, small_home, small_misc, storage, tables, wall  # noqa: F401  (register)
@@ -99,19 +99,21 @@ def build_asset(seed: int, index: int) -> tuple[AssetRecord, MeshData]:
     name = family_of(seed, index)
     fam = FAMILIES[name]
     shape = fam.build(np.random.default_rng(np.random.SeedSequence([seed, index])))
+    # values rounded as the JSON index stores them, so a record read back equals the one built
+    supports = tuple(SupportSurface.from_json(sup.to_json()) for sup in shape.supports)
     record = AssetRecord(
         id=f"proc:{name}/{index:06d}",
         source=SOURCE,
         name=f"{shape.class_name} ({name} #{index})",
         class_name=shape.class_name,
         groups=fam.groups,
-        size=shape.size,
-        supports=shape.supports,
+        size=tuple(round(x, 6) for x in shape.size),  # type: ignore[arg-type]
+        supports=supports,
         triangles=int(len(shape.mesh.faces)),
         license=LICENSE,
         attribution=ATTRIBUTION,
         family=name,
-        elevation=shape.elevation,
+        elevation=round(shape.elevation, 6),
         extra={"seed": seed, "index": index, "version": GENERATOR_VERSION, **shape.extra},
     )
     return record, shape.mesh
