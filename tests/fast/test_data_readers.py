@@ -223,7 +223,10 @@ def test_assist3d_format_keeps_every_instance(tmp_path):
     (d / "meta.json").write_text("{}")
     (d / "layout.json").write_text("{}")
     (tmp_path / "out" / "manifest.json").write_text("{}")
-    s = open_dataset(f"assist3d:{tmp_path / 'out'}")[0]
+    _pointcept_scene(tmp_path / "out" / "scene_00001", "segment")  # unfinished: no meta.json
+    ds = open_dataset(f"assist3d:{tmp_path / 'out'}")
+    assert ds.scene_ids == ["scene_00000"]
+    s = ds[0]
     assert s.scene_id == "scene_00000"
     assert s.instance.tolist() == [0, 1, 2, 2, 3, -1]
 

@@ -14,7 +14,8 @@ excluded. Options (``pointcept:PATH?segment=segment200&ignore=0,2``) override th
 excluded classes.
 
 ``assist3d:PATH`` reads our generator's output (the same layout plus ``layout.json`` and
-``meta.json`` per scene): every ``instance >= 0`` point is an object.
+``meta.json`` per scene): every ``instance >= 0`` point is an object. The generator writes
+``meta.json`` last, so folders without it (an interrupted or running job) are skipped.
 """
 
 from __future__ import annotations
@@ -72,7 +73,14 @@ class PointceptDataset(SceneDataset):
                 self._ignore = tuple(int(x) for x in ignore.split(",") if x.strip())
             except ValueError:
                 raise DataError(f"{fmt}:{root}: ?ignore={ignore!r} must be comma-separated integers") from None
-        self._dirs = _scene_dirs(root)
+        dirs = _scene_dirs(root)
+        if fmt == "assist3d":
+            # The generator writes meta.json last: a folder without it is unfinished.
+            done = {k: d for k, d in dirs.items() if (d / "meta.json").is_file()}
+            if len(done) < len(dirs):
+                log.warning("%s: skipping %d unfinished scene folders (no meta.json)", root, len(dirs) - len(done))
+            dirs = done
+        self._dirs = dirs
         super().__init__(root, fmt, list(self._dirs))
 
     def _load(self, scene_id: str) -> PointSample:
