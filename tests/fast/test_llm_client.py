@@ -124,6 +124,10 @@ def test_schema_values_and_fences():
     assert err is None
     checked = check_answer(data, WALL)
     assert checked.order[0].relations == () and any("wall height" in p for p in checked.problems)
+    # the painting (0.6 m tall) cannot start 2.5 m up a 2.8 m wall
+    tall = check_answer({"objects": [{"index": 0, "relations": [{"relation": "height", "value": [2.5, 2.6]}]},
+                                     {"index": 1}]}, WALL)
+    assert tall.order[0].relations == () and "at most 2.20 m" in tall.problems[0]
     assert check_answer({"objects": "nope"}, WALL).usable is False
     data, err = parse_json_text('Sure! Here it is: {"objects": []} hope it helps')
     assert err is None and data == {"objects": []}

@@ -104,7 +104,7 @@ def test_good_answer(secret_env, tmp_path):
     # targets given as object indices become positions in the plan: table (index 0) is position 1
     chair = plan.order[2]
     assert Relation("around", 1) in chair.relations and Relation("near", 1, (), True) in chair.relations
-    assert plan.order[0].relations == (Relation("edge", None, (), True),)  # edge is hard by default
+    assert plan.order[0].relations == (Relation("edge"),)  # soft unless the answer says "hard": true
     assert plan.stats["llm_calls"] == 1 and plan.stats["cache_hits"] == 0 and plan.stats["repairs"] == 0
     assert plan.stats["prompt_tokens"] == 11 and plan.stats["completion_tokens"] == 7
     assert plan.stats["llm_seconds"] <= plan.stats["seconds"] < TIMEOUT
@@ -164,7 +164,7 @@ def test_later_and_unknown_targets_are_dropped(secret_env, tmp_path):
     text = srv.requests[1]["json"]["messages"][-1]["content"]
     assert "target 1 is listed later" in text and "target 17 is not one of the objects" in text
     assert "refers to the object itself" in text and "'height' is not allowed for floor" in text
-    assert plan.order[0].relations == (Relation("middle", None, (), True),)
+    assert plan.order[0].relations == (Relation("middle"),)
     assert plan.order[1].relations == (Relation("near", 0),)
     assert len([n for n in plan.notes if n.startswith("dropped:")]) == 4
 
@@ -202,7 +202,7 @@ def test_wall_and_on_top_groups(secret_env, tmp_path):
         plan, _ = _plan(_cfg(srv, tmp_path), WALL)
         assert "id 4: sofa at x=2.00, y=3.50" in srv.requests[0]["json"]["messages"][-1]["content"]
     assert plan.planner == f"llm:{MODEL}"
-    assert plan.order[0].relations == (Relation("above", 4), Relation("height", None, (1.2, 1.6), True))
+    assert plan.order[0].relations == (Relation("above", 4), Relation("height", None, (1.2, 1.6)))
     assert plan.order[1].relations == (Relation("right_of", 0),)
     with FakeServer([Step(ontop)]) as srv:
         plan, _ = _plan(_cfg(srv, tmp_path), ONTOP)
@@ -241,7 +241,7 @@ def test_cut_off_answer_is_salvaged(secret_env, tmp_path):
     assert plan.planner == f"llm:{MODEL}" and plan.stats["repairs"] == 1
     assert "cut off at the token limit" in srv.requests[1]["json"]["messages"][-1]["content"]
     assert [p.source for p in plan.order] == [2, 0, 1]  # two salvaged entries, the chair appended
-    assert plan.order[1].relations == (Relation("middle", None, (), True), Relation("far", 0))
+    assert plan.order[1].relations == (Relation("middle"), Relation("far", 0))
     assert any("missing from the answer" in n for n in plan.notes)
 
 

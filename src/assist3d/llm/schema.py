@@ -26,8 +26,9 @@ from typing import Any
 from ..contracts import Relation
 from ..scene.relations import CROSS_GROUP, RELATIONS, PlannedObject, PlanRequest, group_kind
 
-# Relations that are hard constraints unless the answer says otherwise.
-HARD_BY_DEFAULT = frozenset({"edge", "middle", "height", "on"})
+# Relations that are hard constraints unless the answer says otherwise (the rest are soft unless
+# the answer marks them "hard": true), as in the rule planner.
+HARD_BY_DEFAULT = frozenset({"on"})
 
 ANSWER_SCHEMA: dict[str, Any] = {
     "type": "object",
@@ -208,7 +209,12 @@ def _check_relation(r: Any, idx: int, kind: str, pos_of: dict[int, int], placed_
                 or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in v)):
             return None, f"object {idx}: relation {name!r} needs 'value': a list of {spec.values} numbers"
         value = tuple(float(x) for x in v)
-        if name == "height" and not 0.0 <= value[0] <= value[1] <= request.room.height:
-            return None, (f"object {idx}: height range {list(value)} must satisfy 0 <= min <= max <= "
-                          f"{request.room.height:.2f} (the wall height)")
+        if name == "height":
+            if not 0.0 <= value[0] <= value[1] <= request.room.height:
+                return None, (f"object {idx}: height range {list(value)} must satisfy 0 <= min <= max <= "
+                              f"{request.room.height:.2f} (the wall height)")
+            tall = float(request.objects[idx].size[2])
+            if value[0] + tall > request.room.height:
+                return None, (f"object {idx} is {tall:.2f} m tall: its bottom edge must be at most "
+                              f"{request.room.height - tall:.2f} m above the floor, not {value[0]:g} m")
     return Relation(name, target, value, hard), None
