@@ -75,7 +75,8 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
         dirs = rotate_directions(cam_dirs, cam.pose)
         center = cam.pose[:3, 3].astype(np.float32)
         origins = np.empty_like(dirs)
-        origins[:] = center
+        for j in range(3):
+            origins[:, j] = center[j]
         t, face = caster.cast(origins, dirs)
         if realism:
             t, face = apply_depth_sensor(scene, t, face, dirs, cam.width, cam.height, cfg,
@@ -83,7 +84,13 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
         pix = np.flatnonzero(face >= 0)
         fh = face[pix]
         counts = np.bincount(inst_shift[fh], minlength=n_ids)
-        pts = center + t[pix, None] * dirs[pix]
+        tp = t[pix]
+        pts = np.empty((len(pix), 3), np.float32)
+        for j in range(3):  # column by column: (N, 3) broadcasts are slow
+            col = dirs[:, j][pix]
+            col *= tp
+            col += center[j]
+            pts[:, j] = col
         keys = grid.keys(pts)
         keep = pick_one_per_voxel(keys, int(salts[i]))
         return keys[keep], pts[keep], fh[keep], counts, len(pix)

@@ -39,11 +39,23 @@ class VoxelGrid:
         return int(np.prod(self.dims))
 
     def keys(self, points: np.ndarray) -> np.ndarray:
-        """(N,) int64 linear voxel index of points (N, 3); points outside are clamped to the border."""
-        ijk = np.floor(points * np.float32(1.0 / self.size) + np.float32(0.5)).astype(np.int64)
-        ijk -= self.lo
-        np.clip(ijk, 0, self.dims - 1, out=ijk)
-        return (ijk[:, 0] * self.dims[1] + ijk[:, 1]) * self.dims[2] + ijk[:, 2]
+        """(N,) int64 linear voxel index of points (N, 3) float32; points outside are clamped to
+        the border. Computed column by column (1-d loops are several times faster than (N, 3)
+        broadcasts)."""
+        inv = np.float32(1.0 / self.size)
+        half = np.float32(0.5)
+        key = np.zeros(len(points), np.int64)
+        for j in range(3):
+            q = points[:, j] * inv
+            q += half
+            np.floor(q, out=q)
+            ij = q.astype(np.int64)
+            ij -= self.lo[j]
+            np.clip(ij, 0, self.dims[j] - 1, out=ij)
+            if j:
+                key *= self.dims[j]
+            key += ij
+        return key
 
 
 def _bits(n: int) -> int:
