@@ -52,12 +52,14 @@ def main(argv: list[str] | None = None) -> int:
     if not args.no_check:
         from assist3d.scene.checks import check_layout as check
 
-    placed, seconds, problems, per_group, dropped = [], [], [], Counter(), []
+    placed, seconds, cpu, problems, per_group, dropped = [], [], [], [], Counter(), []
     reasons: Counter = Counter()
     budget_hits = 0
     check_s = 0.0
     for k in range(args.scenes):
+        c0 = time.process_time()
         lay = build_layout(catalog, cfg, scene_seed(args.seed, k), scene_index=k)
+        cpu.append(time.process_time() - c0)
         placed.append(len(lay.instances))
         seconds.append(lay.seconds)
         dropped.append(len(lay.dropped))
@@ -88,6 +90,8 @@ def main(argv: list[str] | None = None) -> int:
         "scenes_with_problems": sum(1 for p in problems if p) if check is not None else None,
         "median_seconds": round(statistics.median(seconds), 3),
         "max_seconds": round(max(seconds), 3),
+        "median_cpu_seconds": round(statistics.median(cpu), 3),
+        "max_cpu_seconds": round(max(cpu), 3),
         "catalog_load_seconds": round(load_s, 2),
         "check_seconds": round(check_s, 2),
     }

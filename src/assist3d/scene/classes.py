@@ -132,9 +132,12 @@ class ClassList:
     classes: tuple[str, ...]
     reduction: dict = field(default_factory=dict, compare=False, hash=False)
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_key", tuple(sorted(self.reduction.items())))
+
     def match(self, asset_class: str) -> str | None:
         """The class of this list an asset class counts as, or ``None``."""
-        return _match_cached(self.name, self.classes, tuple(sorted(self.reduction.items())), asset_class)
+        return _match_cached(self.name, self.classes, self._key, asset_class)  # type: ignore[attr-defined]
 
     def __contains__(self, asset_class: str) -> bool:
         return self.match(asset_class) is not None
@@ -185,6 +188,7 @@ def _parse_lines(text: str) -> tuple[str, ...]:
     return tuple(out)
 
 
+@lru_cache(maxsize=None)
 def builtin_class_list(name: str) -> ClassList:
     """ScanNet's 18 benchmark classes (``scannet18``) or ScanNet200's 198 object classes."""
     if name not in BUILTIN_LISTS:

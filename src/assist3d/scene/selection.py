@@ -225,10 +225,13 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
     partners = {g: partner_map(pool.classes, cfg.class_pool_seed, g) if cfg.pairing_prob > 0 else {}
                 for g, pool in pools.items()}
 
+    real_classes = ({c for pool in pools.values() for c in pool.classes if classes.match(c) is not None}
+                    if classes is not None else set())
+
     def real_of(pool: _Pool, g: str) -> _Pool | None:
         if classes is None:
             return None
-        real = _Pool(tuple(r for r in pool.records if classes.match(r.class_name) is not None))
+        real = _Pool(tuple(r for r in pool.records if r.class_name in real_classes))
         if pool and not real and g in ("floor", "wall", "obj"):
             log.warning("selection: no %s asset matches the %s classes; complementary draws use the whole pool",
                         g, classes.name)
