@@ -165,7 +165,7 @@ class ChatClient:
             usage.prompt_tokens += answer.prompt_tokens
             usage.completion_tokens += answer.completion_tokens
             secret = self._api_key()
-            if secret and secret in answer.content:
+            if len(secret) >= 8 and secret in answer.content:
                 log.warning("%s: the answer contains the API key; not caching it", self.endpoint.display)
             elif use_cache:
                 self.cache.put(key, self.model,
