@@ -8,6 +8,20 @@ torch = pytest.importorskip("torch")
 import torch.nn.functional as F  # noqa: E402
 
 from assist3d.models import sparse as sp  # noqa: E402
+from assist3d.models import spconv_backend  # noqa: E402
+
+BACKENDS = ["torch", pytest.param("spconv", marks=pytest.mark.skipif(not spconv_backend.available(),
+                                                                     reason="spconv not installed"))]
+
+
+@pytest.fixture(params=BACKENDS)
+def backend(request):
+    sp.set_backend(request.param)
+    yield request.param
+    sp.set_backend("torch")
+
+
+DT = torch.float32
 
 
 def _random_sites(gen: torch.Generator, batch: int, size: int, n: int) -> torch.Tensor:
@@ -28,49 +42,62 @@ def _read(dense: torch.Tensor, c: torch.Tensor) -> torch.Tensor:
     return dense.permute(0, 2, 3, 4, 1)[c[:, 0], c[:, 1], c[:, 2], c[:, 3]]
 
 
+def _has_backward(backend: str) -> bool:
+    """spconv 2.3's CPU package runs forward only (its backward asks for a CUDA stream)."""
+    return backend == "torch" or torch.cuda.is_available()
+
+
+def _close(a, b):
+    torch.testing.assert_close(a, b, rtol=1e-4, atol=1e-4)
+
+
 @pytest.mark.parametrize("k", [1, 3, 5])
-def test_submanifold_equals_dense(k):
+def test_submanifold_equals_dense(k, backend):
     gen = torch.Generator().manual_seed(k)
     coords = _random_sites(gen, 2, 7, 150)
-    feats = torch.randn(150, 4, generator=gen, dtype=torch.float64, requires_grad=True)
-    conv = sp.SubMConv3d(4, 5, kernel_size=k).double()
+    feats = torch.randn(150, 4, generator=gen, dtype=DT, requires_grad=True)
+    conv = sp.SubMConv3d(4, 5, kernel_size=k).to(DT)
     out = conv(sp.sparse_tensor(coords, feats)).feats
     dense_w = conv.weight.detach().clone().reshape(k, k, k, 4, 5).permute(4, 3, 0, 1, 2).requires_grad_(True)
     feats2 = feats.detach().clone().requires_grad_(True)
-    ref = _read(F.conv3d(_scatter(torch.zeros(2, 4, 7, 7, 7, dtype=torch.float64), coords.long(), feats2),
+    ref = _read(F.conv3d(_scatter(torch.zeros(2, 4, 7, 7, 7, dtype=DT), coords.long(), feats2),
                          dense_w, padding=k // 2), coords)
-    torch.testing.assert_close(out, ref)
-    g = torch.randn(out.shape, generator=gen, dtype=torch.float64)
+    _close(out, ref)
+    if not _has_backward(backend):
+        return
+    g = torch.randn(out.shape, generator=gen, dtype=DT)
     (out * g).sum().backward()
     (ref * g).sum().backward()
-    torch.testing.assert_close(feats.grad, feats2.grad)
-    torch.testing.assert_close(conv.weight.grad.reshape(k, k, k, 4, 5).permute(4, 3, 0, 1, 2), dense_w.grad)
+    _close(feats.grad, feats2.grad)
+    _close(conv.weight.grad.reshape(k, k, k, 4, 5).permute(4, 3, 0, 1, 2), dense_w.grad)
 
 
-def test_down_and_up_equal_dense():
+def test_down_and_up_equal_dense(backend):
     gen = torch.Generator().manual_seed(7)
     coords = _random_sites(gen, 2, 8, 200)
-    feats = torch.randn(200, 3, generator=gen, dtype=torch.float64, requires_grad=True)
+    feats = torch.randn(200, 3, generator=gen, dtype=DT, requires_grad=True)
     x = sp.sparse_tensor(coords, feats)
-    down = sp.DownConv3d(3, 4).double()
+    down = sp.DownConv3d(3, 4).to(DT)
     y = down(x)
     dense_w = down.weight.detach().clone().reshape(2, 2, 2, 3, 4).permute(4, 3, 0, 1, 2).requires_grad_(True)
     feats2 = feats.detach().clone().requires_grad_(True)
-    dense_in = _scatter(torch.zeros(2, 3, 8, 8, 8, dtype=torch.float64), coords.long(), feats2)
+    dense_in = _scatter(torch.zeros(2, 3, 8, 8, 8, dtype=DT), coords.long(), feats2)
     dense_y = F.conv3d(dense_in, dense_w, stride=2)
     ref = _read(dense_y, y.coords)
-    torch.testing.assert_close(y.feats, ref)
+    _close(y.feats, ref)
     # the coarse sites are exactly the parents of the active sites
     parents = {tuple(r) for r in torch.cat([coords[:, :1], coords[:, 1:] // 2], 1).tolist()}
     assert {tuple(r) for r in y.coords.tolist()} == parents
-    up = sp.UpConv3d(4, 2).double()
+    up = sp.UpConv3d(4, 2).to(DT)
     z = up(y, x)
     up_w = up.weight.detach().clone().reshape(2, 2, 2, 4, 2).permute(3, 4, 0, 1, 2).requires_grad_(True)
     ref_z = _read(F.conv_transpose3d(dense_y, up_w, stride=2), coords)
-    torch.testing.assert_close(z.feats, ref_z)
-    g = torch.randn(z.feats.shape, generator=gen, dtype=torch.float64)
+    _close(z.feats, ref_z)
+    if not _has_backward(backend):
+        return
+    g = torch.randn(z.feats.shape, generator=gen, dtype=DT)
     (z.feats * g).sum().backward()
     (ref_z * g).sum().backward()
-    torch.testing.assert_close(feats.grad, feats2.grad)
-    torch.testing.assert_close(down.weight.grad.reshape(2, 2, 2, 3, 4).permute(4, 3, 0, 1, 2), dense_w.grad)
-    torch.testing.assert_close(up.weight.grad.reshape(2, 2, 2, 4, 2).permute(3, 4, 0, 1, 2), up_w.grad)
+    _close(feats.grad, feats2.grad)
+    _close(down.weight.grad.reshape(2, 2, 2, 3, 4).permute(4, 3, 0, 1, 2), dense_w.grad)
+    _close(up.weight.grad.reshape(2, 2, 2, 4, 2).permute(3, 4, 0, 1, 2), up_w.grad)

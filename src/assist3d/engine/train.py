@@ -25,6 +25,7 @@ from ..contracts import PointSample
 from ..errors import ConfigError, DataError
 from ..fileio import write_bytes_atomic, write_text_atomic
 from ..models.mask3d import Mask3D
+from ..models.sparse import set_backend
 from .config import ModelConfig, TrainConfig, dump_train_config, parse_train_config
 from .dist import DistInfo, all_reduce_mean, init_distributed, shutdown
 from .losses import scene_loss
@@ -74,11 +75,7 @@ def resolve_device(name: str) -> str:
 
 def build_model(cfg: ModelConfig) -> torch.nn.Module:
     kwargs = cfg.model_dump()
-    backend = kwargs.pop("backend")
-    if backend == "spconv":
-        from ..models.spconv_backend import use_spconv
-
-        use_spconv()
+    set_backend(kwargs.pop("backend"))
     return Mask3D(**kwargs)
 
 

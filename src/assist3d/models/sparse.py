@@ -28,9 +28,25 @@ from typing import Any
 import torch
 from torch import nn
 
+_BACKEND = {"name": "torch"}
 _BITS = 16  # bits per spatial axis in a key (65,536 voxels = 1.3 km at 2 cm)
 _MASK = (1 << _BITS) - 1
 _HALF = 1 << (_BITS - 1)
+
+
+def set_backend(name: str) -> None:
+    """Select the convolution kernels: ``torch`` (pure PyTorch, default) or ``spconv`` (if installed)."""
+    if name not in ("torch", "spconv"):
+        raise ValueError(f"unknown sparse backend {name!r}; expected 'torch' or 'spconv'")
+    if name == "spconv":
+        from . import spconv_backend
+
+        spconv_backend._spconv()
+    _BACKEND["name"] = name
+
+
+def get_backend() -> str:
+    return _BACKEND["name"]
 
 
 def encode_keys(coords: torch.Tensor) -> torch.Tensor:
@@ -162,8 +178,15 @@ class SubMConv3d(nn.Module):
 
     def forward(self, x: SparseTensor) -> SparseTensor:
         feats = x.feats
-        maps = x.cset.submanifold_map(self.kernel_size)
         w = self.weight.to(feats.dtype)
+        if _BACKEND["name"] == "spconv":
+            from . import spconv_backend
+
+            out = spconv_backend.subm_conv(x.coords, feats, w, self.kernel_size)
+            if self.bias is not None:
+                out = out + self.bias.to(out.dtype)
+            return x.replace(out)
+        maps = x.cset.submanifold_map(self.kernel_size)
         centre = maps.index(None)
         out = feats @ w[centre]
         for i, m in enumerate(maps):
@@ -222,6 +245,13 @@ class UpConv3d(nn.Module):
             raise ValueError("UpConv3d: the input is not the stride-2 parent of the target coordinates")
         w = self.weight.to(x.feats.dtype)
         out: torch.Tensor | None = None
+        if _BACKEND["name"] == "spconv":
+            from . import spconv_backend
+
+            out = spconv_backend.up_conv(x.coords, x.feats, w, target.coords)
+            if self.bias is not None:
+                out = out + self.bias.to(out.dtype)
+            return SparseTensor(feats=out, cset=target.cset, stride=target.stride)
         for o in range(8):
             rows = torch.nonzero(octant == o).squeeze(1)
             src = x.feats[inverse[rows]] @ w[o]

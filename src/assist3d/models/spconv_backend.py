@@ -1,0 +1,100 @@
+"""Optional ``spconv`` 2.x backend for the three sparse operators of :mod:`assist3d.models.sparse`.
+
+The weights stay the pure-PyTorch modules' parameters (``(k**3, C_in, C_out)``), so one checkpoint
+runs on either backend; each call reshapes them to spconv's ``(C_out, kx, ky, kz, C_in)`` layout and
+runs spconv's implicit-GEMM kernels through the module's ``_conv_forward``. Outputs are reordered to
+the pure-PyTorch coordinate order, so the two backends are interchangeable layer by layer. The
+transposed convolution has no cheap "onto these coordinates" form in spconv without sharing its
+index dictionary, so it generates all eight children and keeps the target ones.
+
+Enable with ``set_backend("spconv")`` (``model.backend: spconv`` in a training config).
+"""
+
+from __future__ import annotations
+
+import torch
+
+from ..errors import ConfigError
+
+
+def _spconv():
+    try:
+        import spconv.pytorch as spc
+    except ImportError as e:
+        raise ConfigError(f"backend 'spconv' asked for but spconv is not installed ({e}); "
+                          "pip install 'assist3d[spconv]' (CPU) or spconv-cuXXX (CUDA), or use backend torch") from None
+    return spc
+
+
+def available() -> bool:
+    try:
+        import spconv.pytorch  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+_MODULES: dict[tuple, object] = {}
+
+
+def _module(kind: str, cin: int, cout: int, k: int):
+    key = (kind, cin, cout, k)
+    if key not in _MODULES:
+        spc = _spconv()
+        if kind == "subm":
+            m = spc.SubMConv3d(cin, cout, k, bias=False)
+        elif kind == "down":
+            m = spc.SparseConv3d(cin, cout, 2, stride=2, bias=False)
+        else:
+            m = spc.SparseConvTranspose3d(cin, cout, 2, stride=2, bias=False)
+        _MODULES[key] = m
+    return _MODULES[key]
+
+
+def _to_spconv(coords: torch.Tensor, feats: torch.Tensor, pad: int = 2):
+    spc = _spconv()
+    c = coords.to(torch.int32).contiguous()
+    if len(c) and int(c[:, 1:].min()) < 0:
+        raise ValueError("the spconv backend needs non-negative voxel coordinates")
+    shape = (c[:, 1:].max(0).values + pad).tolist() if len(c) else [1, 1, 1]
+    batch = int(c[:, 0].max()) + 1 if len(c) else 1
+    return spc.SparseConvTensor(feats.contiguous(), c, shape, batch)
+
+
+def _weight(w: torch.Tensor, k: int) -> torch.Tensor:
+    return w.reshape(k, k, k, w.shape[1], w.shape[2]).permute(4, 0, 1, 2, 3).contiguous()
+
+
+def subm_conv(coords: torch.Tensor, feats: torch.Tensor, weight: torch.Tensor, k: int) -> torch.Tensor:
+    """Submanifold conv; ``weight`` (k**3, C_in, C_out); output rows in input order."""
+    if k == 1:  # spconv itself runs a 1x1x1 conv as one matmul
+        return feats @ weight[0]
+    m = _module("subm", weight.shape[1], weight.shape[2], k)
+    x = _to_spconv(coords, feats, pad=k)
+    y = m._conv_forward(m.training, x, _weight(weight, k), None)
+    return y.features
+
+
+def down_conv(coords: torch.Tensor, feats: torch.Tensor, weight: torch.Tensor, coarse) -> torch.Tensor:
+    """Kernel-2 stride-2 conv; output rows in the order of ``coarse`` (a CoordSet)."""
+    m = _module("down", weight.shape[1], weight.shape[2], 2)
+    x = _to_spconv(coords, feats)
+    y = m._conv_forward(m.training, x, _weight(weight, 2), None)
+    rows = coarse.lookup(y.indices)
+    if bool((rows < 0).any()):
+        raise RuntimeError("spconv produced coarse sites that the coordinate map does not know")
+    out = y.features.new_zeros((len(coarse), y.features.shape[1]))
+    return out.index_copy(0, rows, y.features)
+
+
+def up_conv(coords: torch.Tensor, feats: torch.Tensor, weight: torch.Tensor, target_coords: torch.Tensor) -> torch.Tensor:
+    """Transposed kernel-2 stride-2 conv read at ``target_coords`` (N, 4)."""
+    from .sparse import CoordSet
+
+    m = _module("up", weight.shape[1], weight.shape[2], 2)
+    x = _to_spconv(coords, feats)
+    y = m._conv_forward(m.training, x, _weight(weight, 2), None)
+    rows = CoordSet.build(y.indices).lookup(target_coords)
+    if bool((rows < 0).any()):
+        raise RuntimeError("spconv's transposed conv missed target sites")
+    return y.features[rows]
