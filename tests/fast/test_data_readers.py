@@ -277,3 +277,17 @@ def test_ply_big_endian(tmp_path):
     mesh = read_ply(p, faces=True)
     assert mesh.xyz()[:, 0].tolist() == [1.5, 2.5] and mesh.rgb()[:, 0].tolist() == [10, 20]
     assert mesh.faces.tolist() == [[0, 1, 1]]
+
+
+def test_s3dis_cache_returns_the_same_room_and_tracks_edits(tmp_path):
+    anno = _s3dis_room(tmp_path)
+    ds = open_dataset(f"s3dis:{tmp_path}?cache=1")
+    first = ds[0]
+    from assist3d.paths import cache_root
+
+    assert len(list((cache_root() / "s3dis").glob("Area_5_hallway_6-*.npz"))) == 1
+    again = ds[0]  # from the cache
+    for name in ("coord", "color", "instance", "segment"):
+        assert np.array_equal(getattr(first, name), getattr(again, name))
+    (anno / "chair_3.txt").write_text("1 1 1 10 20 30\n")
+    assert len(ds[0]) == len(first) + 1

@@ -8,7 +8,7 @@ format      PATH                                                           optio
 ==========  =============================================================  ====================
 scannet     folder of ScanNet v2 scene folders (or ``scans/``'s parent)     ``labels=TSV``
 scannetpp   ScanNet++ root (holding ``data/``) or ``data/``                 -
-s3dis       ``Stanford3dDataset_v1.2_Aligned_Version``, an area or a room   -
+s3dis       ``Stanford3dDataset_v1.2_Aligned_Version``, an area or a room   ``cache=1``
 pointcept   Pointcept scene folder, split folder or root of splits         ``segment``, ``ignore``
 assist3d    our generator's output folder                                  -
 array       one ``(N, 8)`` ``.npy`` or a folder of them                    -
@@ -37,7 +37,7 @@ __all__ = ["FORMATS", "SceneDataset", "open_dataset", "parse_spec"]
 _READERS: dict[str, tuple[Callable[..., SceneDataset], frozenset[str]]] = {
     "scannet": (lambda p, **kw: ScanNetDataset(p, **kw), frozenset({"labels"})),
     "scannetpp": (lambda p, **kw: ScanNetPPDataset(p, **kw), frozenset()),
-    "s3dis": (lambda p, **kw: S3DISDataset(p, **kw), frozenset()),
+    "s3dis": (lambda p, **kw: S3DISDataset(p, **kw), frozenset({"cache"})),
     "pointcept": (lambda p, **kw: PointceptDataset(p, fmt="pointcept", **kw), frozenset({"segment", "ignore"})),
     "assist3d": (lambda p, **kw: PointceptDataset(p, fmt="assist3d", **kw), frozenset()),
     "array": (lambda p, **kw: ArrayDataset(p, **kw), frozenset()),
