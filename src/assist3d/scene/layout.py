@@ -162,7 +162,12 @@ class _Run:
         place_group, place_group_random = _placement_api()
         t0 = time.perf_counter()
         placed_before = tuple(self.instances)
+        # the placement sees every instance so far (collisions with wall shelves above a table...);
+        # the planner of an on-top group only its support (short LLM prompts, stable cache keys)
         request = PlanRequest(group, objects, self.room, placed_before, support)  # type: ignore[arg-type]
+        plan_request = request
+        if support is not None:
+            plan_request = PlanRequest(group, objects, self.room, (support,), support)  # type: ignore[arg-type]
         place_rng = make_rng(self.seed, "place", group)
         extra_dropped: list[DroppedObject] = []
         order: list[int] = list(range(len(objects)))
@@ -172,8 +177,9 @@ class _Run:
                 result = place_group_random(request, self.catalog, cfg=self.cfg.layout, rng=place_rng,
                                             next_id=self.next_id)
             else:
-                plan = self.plan(request, make_rng(self.seed, "plan", group))
-                plan, extra_dropped, notes = sanitise_plan(plan, request)
+                plan = self.plan(plan_request, make_rng(self.seed, "plan", group))
+                self.notes.extend(plan.notes)
+                plan, extra_dropped, notes = sanitise_plan(plan, plan_request)
                 self.notes.extend(notes)
                 self.planners[group] = plan.planner
                 order = [p.source for p in plan.order]
