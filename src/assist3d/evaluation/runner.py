@@ -91,6 +91,10 @@ def evaluate_dataset(
         raise DataError(f"{pred_dir}: prediction folder not found")
     paths = {sid: prediction_path(pred_dir, sid) for sid in dataset.scene_ids}
     missing = tuple(sid for sid, p in paths.items() if p is None)
+    known = set(dataset.scene_ids)
+    extra = sorted(f.stem for f in pred_dir.glob("*.npz") if f.stem not in known)
+    if extra:
+        log.warning("%s: %d prediction files match no scene of %s (e.g. %s)", pred_dir, len(extra), dataset.name, extra[0])
     if missing and not allow_missing:
         shown = ", ".join(missing[:10]) + (f" ... ({len(missing)} in all)" if len(missing) > 10 else "")
         raise DataError(
