@@ -132,3 +132,18 @@ def test_schema_values_and_fences():
     data, err = parse_json_text('Sure! Here it is: {"objects": []} hope it helps')
     assert err is None and data == {"objects": []}
     assert parse_json_text("{'objects': []}")[1] is not None  # Python literals are not JSON
+
+
+def test_concurrency_limit_holds_across_processes(tmp_path):
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom assist3d.config import LLMConfig\nfrom assist3d.llm.client import ChatClient\n"
+            "cfg = LLMConfig(base_url=sys.argv[1], model='m', timeout_s=5, retries=0, concurrency=1, "
+            "cache_dir=sys.argv[2])\n"
+            "ChatClient(cfg).complete([{'role': 'user', 'content': sys.argv[3]}], use_cache=False)\n")
+    with FakeServer([Step('{"ok": 1}', sleep=0.6)]) as srv:
+        procs = [subprocess.Popen([sys.executable, "-c", code, srv.url, str(tmp_path / "llm"), f"p{k}"])
+                 for k in range(3)]
+        assert [p.wait(30) for p in procs] == [0, 0, 0]
+    assert len(srv.requests) == 3 and srv.max_active == 1
