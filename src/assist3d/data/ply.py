@@ -162,7 +162,8 @@ def read_ply(path: str | Path, *, faces: bool = False) -> PlyMesh:
         elif el.name == "face" and faces:
             tris = _faces_from(path, arr, el)
             break
-    assert vertex is not None
+    if vertex is None:
+        raise DataError(f"{path}: PLY vertex element could not be read")
     return PlyMesh(path, vertex, tris)
 
 
@@ -240,7 +241,8 @@ def _read_ascii(path: Path, body: bytes, elements: list[_Element], faces: bool) 
             else:
                 tris = values.reshape(-1, 4)[:, 1:].astype(np.int64)
             break
-    assert vertex is not None
+    if vertex is None:
+        raise DataError(f"{path}: PLY vertex element could not be read")
     return PlyMesh(path, vertex, tris)
 
 
