@@ -291,3 +291,11 @@ def test_s3dis_cache_returns_the_same_room_and_tracks_edits(tmp_path):
         assert np.array_equal(getattr(first, name), getattr(again, name))
     (anno / "chair_3.txt").write_text("1 1 1 10 20 30\n")
     assert len(ds[0]) == len(first) + 1
+
+
+def test_scannet_face_index_out_of_range_names_the_mesh(tmp_path):
+    d = write_scannet_scene(tmp_path)
+    (tmp_path / "scannetv2-labels.combined.tsv").write_text(TSV)
+    write_ply(d / "scene0000_00_vh_clean_2.ply", GRID, RGB, np.array([[0, 1, 99]]))
+    with pytest.raises(DataError, match=r"vh_clean_2\.ply.*out of range"):
+        open_dataset(f"scannet:{tmp_path}")[0]

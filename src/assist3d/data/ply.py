@@ -74,6 +74,21 @@ class PlyMesh:
         return None
 
 
+def mesh_normals(mesh: "PlyMesh") -> np.ndarray:
+    """``(N, 3) float32`` normals: the file's ``nx, ny, nz`` if present, else area-weighted vertex
+    normals from the faces, else zeros."""
+    names = mesh.vertex.dtype.names or ()
+    if all(f in names for f in ("nx", "ny", "nz")):
+        return _stack_fields(mesh, ("nx", "ny", "nz")).astype(np.float32)
+    coord = mesh.xyz()
+    if mesh.faces is None:
+        return np.zeros((len(coord), 3), np.float32)
+    try:
+        return vertex_normals(coord, mesh.faces)
+    except DataError as e:
+        raise DataError(f"{mesh.path}: {e}") from None
+
+
 def _stack_fields(mesh: PlyMesh, fields: tuple[str, ...]) -> np.ndarray:
     names = mesh.vertex.dtype.names or ()
     missing = [f for f in fields if f not in names]

@@ -24,7 +24,7 @@ import numpy as np
 from ..contracts import PointSample
 from ..errors import DataError
 from .base import SceneDataset, instances_from_groups, read_json, require_key
-from .ply import read_ply, vertex_normals
+from .ply import mesh_normals, read_ply
 
 log = logging.getLogger(__name__)
 
@@ -110,7 +110,7 @@ class ScanNetDataset(SceneDataset):
         color = mesh.rgb()
         if color is None:
             color = np.zeros((n, 3), np.uint8)
-        normal = vertex_normals(coord, mesh.faces) if mesh.faces is not None else np.zeros((n, 3), np.float32)
+        normal = mesh_normals(mesh)
 
         segs_path = d / f"{scene_id}_vh_clean_2.0.010000.segs.json"
         seg = np.asarray(require_key(segs_path, read_json(segs_path), "segIndices", list), dtype=np.int64)

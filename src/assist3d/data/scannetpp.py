@@ -22,7 +22,7 @@ import numpy as np
 from ..contracts import PointSample
 from ..errors import DataError
 from .base import SceneDataset, instances_from_groups, read_json, require_key
-from .ply import read_ply, vertex_normals
+from .ply import mesh_normals, read_ply
 
 log = logging.getLogger(__name__)
 
@@ -63,7 +63,7 @@ class ScanNetPPDataset(SceneDataset):
         color = mesh.rgb()
         if color is None:
             color = np.zeros((n, 3), np.uint8)
-        normal = vertex_normals(coord, mesh.faces) if mesh.faces is not None else np.zeros((n, 3), np.float32)
+        normal = mesh_normals(mesh)
 
         seg_path = scans / "segments.json"
         seg = np.asarray(require_key(seg_path, read_json(seg_path), "segIndices", list), dtype=np.int64)
