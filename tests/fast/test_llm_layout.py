@@ -85,3 +85,34 @@ def test_build_layout_records_llm_and_rules_groups(tmp_path, monkeypatch, caplog
     assert again.planner == lay.planner
     assert again.stats["cache_hits"] == calls - 1  # every call but the failed wall one
     assert [i.to_json() for i in again.instances] == [i.to_json() for i in lay.instances]
+
+
+def test_build_layout_survives_a_stalling_and_an_oversized_server(tmp_path, monkeypatch):
+    import time
+
+    monkeypatch.setenv("OPENAI_API_KEY", SENTINEL)
+    cat = _catalog(tmp_path / "cat")
+
+    def answer(body: dict) -> Step:
+        text = body["messages"][-1]["content"]
+        if "Floor objects to arrange" in text:
+            return Step(sleep=30)  # stalls far past the time-out
+        if "Support (the objects rest on it)" in text:
+            return Step("x" * 5000)  # over max_response_bytes
+        count = int(re.search(r"Wall objects to hang \((\d+)\)", text).group(1))
+        return Step(json.dumps({"objects": [{"index": i, "relations": [{"relation": "height", "value": [1.2, 1.5]}]}
+                                            for i in range(count)]}))
+
+    with FakeServer([], responder=answer) as srv:
+        cfg = GenerateConfig.model_validate({
+            "selection": {"floor_count": 4, "wall_count": 2, "on_top_count": 1},
+            "layout": {"group_budget_s": 0.3},
+            "llm": {"base_url": srv.url, "model": MODEL, "timeout_s": 1.0, "retries": 1, "backoff_s": 0.01,
+                    "max_response_bytes": 2000, "max_failures": 10, "cache_dir": str(tmp_path / "llm")}})
+        t0 = time.monotonic()
+        lay = layout_mod.build_layout(cat, cfg, 3)
+        elapsed = time.monotonic() - t0
+    assert lay.planner["floor"] == "rules" and lay.planner["wall"] == f"llm:{MODEL}"
+    assert all(v == "rules" for g, v in lay.planner.items() if g.startswith("on:"))
+    assert lay.instances and elapsed < 1.0 + 3.0  # one stalled request, not one per retry
+    assert not files_containing(SENTINEL, tmp_path, os.environ["ASSIST3D_CACHE"])
