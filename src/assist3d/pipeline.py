@@ -20,6 +20,7 @@ from typing import Callable, Iterable
 from .config import GenerateConfig, config_to_dict, dump_config
 from .errors import ConfigError
 from .export import Manifest, read_scene_meta, write_scene
+from .export.writer import remove_stale_temps
 from .rng import make_rng, scene_seed
 
 log = logging.getLogger(__name__)
@@ -191,6 +192,8 @@ def generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int
     manifest = Manifest(out, cfg_dict, cfg.seed, classes, assets_label)
     manifest.check_compatible()
     out.mkdir(parents=True, exist_ok=True)
+    if remove_stale_temps(out):
+        log.info("removed temporary files of an interrupted run in %s", out)
     dump_config(cfg, out / "config.yaml")
 
     todo: list[int] = []
@@ -243,12 +246,14 @@ def generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int
     return DatasetRun(out, indices, skipped, generated, manifest, failed)
 
 
-def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, out: str | None = None) -> dict:
+def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, out: str | None = None,
+                  cfg: GenerateConfig | None = None) -> dict:
     """Generate ``scenes`` scenes at paper settings with one worker; per-stage medians and peak
     memory (max resident set size of this process, which includes the opened catalog).
 
     Returns ``{"scenes", "seconds_per_scene": {"median", "max"}, "stages": {stage: median s},
     "peak_memory_mb", ...}``. Opening (or first building) the catalog is timed separately.
+    ``cfg`` replaces the paper settings (tests use a tiny one).
     """
     import resource
     import statistics
@@ -256,7 +261,8 @@ def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, 
 
     from .config import parse_config
 
-    cfg = parse_config({"seed": seed, "assets": {"library": assets}})
+    if cfg is None:
+        cfg = parse_config({"seed": seed, "assets": {"library": assets}})
     t0 = time.perf_counter()
     gen = Generator(cfg)
     catalog_s = time.perf_counter() - t0

@@ -23,7 +23,7 @@ from .writer import load_scene_arrays
 
 __all__ = ["render_preview", "find_scene_dir"]
 
-MAX_POINTS = 80_000
+MAX_POINTS = 120_000
 
 
 def find_scene_dir(path: str | Path, scene: str | None = None) -> Path:
@@ -58,7 +58,7 @@ def _draw_cloud(ax, coord, normal, rgb, azim: float, elev: float, title: str) ->
     depth = c @ to_eye
     order = np.argsort(depth, kind="stable")  # far first, near drawn on top
     x, y = c[order] @ right, c[order] @ up
-    ax.scatter(x, y, s=0.6, c=col[order] / 255.0, marker=".", linewidths=0, rasterized=True)
+    ax.scatter(x, y, s=1.6, c=col[order] / 255.0, marker="o", linewidths=0, rasterized=True)
     ax.set_aspect("equal")
     ax.set_title(title, fontsize=9)
     ax.axis("off")
@@ -140,7 +140,7 @@ def render_preview(scene_dir: str | Path, out_png: str | Path, *, seed: int = 0)
     _draw_cloud(axes[0, 2], coord[s], normal[s], inst_rgb[s], 35, 50, "instances, cut-away view")
     _draw_cloud(axes[1, 0], coord[s], normal[s], inst_rgb[s], 155, 40, "instances, azimuth 155")
     _draw_cloud(axes[1, 1], coord[s], normal[s], inst_rgb[s], 275, 40, "instances, azimuth 275")
-    _draw_cloud(axes[1, 2], coord[s], normal[s], inst_rgb[s], 0, 90, "instances, from above")
+    _draw_cloud(axes[1, 2], coord[s], normal[s], inst_rgb[s], -90, 90, "instances, from above")
     n_inst = len(set(instance[obj].tolist()))
     fig.suptitle(f"{d.name}: {len(layout.instances)} objects placed, {n_inst} with points, {n:,} points "
                  f"(grey = background)", fontsize=12)

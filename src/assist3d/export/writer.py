@@ -26,7 +26,8 @@ from .ply import ply_bytes
 
 log = logging.getLogger(__name__)
 
-__all__ = ["ARRAYS", "META_NAME", "write_scene", "read_scene_meta", "load_scene_arrays", "file_digest"]
+__all__ = ["ARRAYS", "META_NAME", "write_scene", "read_scene_meta", "load_scene_arrays", "file_digest",
+           "remove_stale_temps"]
 
 ARRAYS: dict[str, tuple[str, int]] = {  # name -> (dtype, columns; 0 = 1-d)
     "coord": ("float32", 3),
@@ -62,6 +63,7 @@ def write_scene(scene_dir: str | Path, sample: PointSample, layout: SceneLayout,
     d = Path(scene_dir)
     d.mkdir(parents=True, exist_ok=True)
     (d / META_NAME).unlink(missing_ok=True)  # the folder is incomplete until the marker is back
+    remove_stale_temps(d)
     files: dict[str, dict] = {}
 
     def put(name: str, data: bytes) -> None:
@@ -86,6 +88,16 @@ def write_scene(scene_dir: str | Path, sample: PointSample, layout: SceneLayout,
         marker["seconds"] = {**marker["seconds"], "write": round(time.perf_counter() - t0, 4)}
     write_json_atomic(d / META_NAME, marker)
     return marker
+
+
+def remove_stale_temps(folder: str | Path) -> int:
+    """Delete temporary files a killed writer left in ``folder`` (``.<name>.<random>.tmp``, the
+    pattern of :func:`assist3d.fileio.atomic_path`); returns how many."""
+    n = 0
+    for p in Path(folder).glob(".*.tmp"):
+        p.unlink(missing_ok=True)
+        n += 1
+    return n
 
 
 def read_scene_meta(scene_dir: str | Path, *, check_files: bool = True) -> dict | None:

@@ -1,0 +1,163 @@
+"""generate end to end on a tiny configuration: determinism, scene-alone regeneration, workers,
+resume after SIGKILL, the manifest, --verify, show and bench."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from assist3d.cli import app
+from assist3d.config import parse_config
+from assist3d.export import read_scene_meta
+from assist3d.pipeline import generate_dataset, run_benchmark, scene_name
+from assist3d.rng import scene_seed
+
+TINY = {
+    "seed": 11,
+    "assets": {"procedural_count": 60},
+    "selection": {"floor_count": 6, "wall_count": 2, "on_top_count": 1},
+    "room": {"area_min": 10.0, "area_max": 16.0},
+    "render": {"width": 80, "height": 60, "fx": 72.2, "fy": 72.2, "vantage_points": 2, "views_per_point": 6},
+}
+FILES = ("coord.npy", "color.npy", "normal.npy", "instance.npy", "segment.npy")
+
+
+def scene_bytes(d: Path) -> dict[str, bytes]:
+    out = {f: (d / f).read_bytes() for f in FILES}
+    lay = json.loads((d / "layout.json").read_text())
+    lay.pop("seconds")  # wall-clock time of the layout search
+    lay.get("stats", {}).pop("timing", None)
+    out["layout"] = json.dumps(lay, sort_keys=True).encode()
+    return out
+
+
+def dataset_bytes(root: Path) -> dict[str, dict[str, bytes]]:
+    return {p.name: scene_bytes(p) for p in sorted(root.glob("scene_*"))}
+
+
+@pytest.fixture(scope="module")
+def full_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("full")
+    run = generate_dataset(parse_config(TINY), out, range(3), verify=True)
+    return out, run
+
+
+def test_dataset_layout_manifest_and_labels(full_run):
+    out, run = full_run
+    assert [m["id"] for m in run.generated] == [scene_name(i) for i in range(3)]
+    man = json.loads((out / "manifest.json").read_text())
+    assert man["seed"] == 11 and man["config"]["render"]["width"] == 80
+    assert {"assist3d", "numpy", "trimesh", "embreex"} <= set(man["versions"])
+    assert len(man["classes"]) > 5 and man["classes"] == sorted(man["classes"])
+    for e, i in zip(man["scenes"], range(3)):
+        assert e["id"] == scene_name(i) and e["seed"] == scene_seed(11, i)
+        assert e["points"] > 1000 and e["instances"] >= 1
+        assert set(e["seconds"]) == {"select", "layout", "assemble", "render", "fuse", "write"}
+        assert "dropped" in e and "planner" in e
+        assert e["check"]["agreement"] >= 0.999 and e["check"]["ok"]
+    assert (out / "config.yaml").is_file()
+    assert yaml.safe_load((out / "config.yaml").read_text())["seed"] == 11
+    for d in sorted(out.glob("scene_*")):
+        arrays = {k: np.load(d / f"{k}.npy") for k in ("coord", "color", "normal", "instance", "segment")}
+        n = len(arrays["coord"])
+        assert all(len(a) == n for a in arrays.values())
+        inst, seg = arrays["instance"], arrays["segment"]
+        assert np.array_equal(inst == -1, seg == -1)  # background in both or in neither
+        ids = {i["id"]: i["class"] for i in json.loads((d / "layout.json").read_text())["instances"]}
+        assert set(np.unique(inst[inst >= 0]).tolist()) <= set(ids)
+        # segment = index of the instance's class in the dataset class list
+        k = np.flatnonzero(inst >= 0)[:200]
+        assert all(man["classes"][s] == ids[i] for i, s in zip(inst[k].tolist(), seg[k].tolist()))
+
+
+def test_scene_alone_and_with_two_workers_equal_the_full_run(full_run, tmp_path):
+    out, _ = full_run
+    ref = dataset_bytes(out)
+    alone = tmp_path / "alone"
+    generate_dataset(parse_config(TINY), alone, [2])
+    assert dataset_bytes(alone) == {"scene_000002": ref["scene_000002"]}
+    pooled = tmp_path / "pooled"
+    run = generate_dataset(parse_config(TINY), pooled, range(3), workers=2)
+    assert len(run.generated) == 3
+    assert dataset_bytes(pooled) == ref
+
+
+def test_resume_skips_complete_scenes_and_redoes_broken_ones(full_run, tmp_path):
+    out, _ = full_run
+    import shutil
+
+    copy = tmp_path / "copy"
+    shutil.copytree(out, copy)
+    (copy / "scene_000001" / "meta.json").unlink()  # unfinished scene
+    raw = bytearray((copy / "scene_000002" / "coord.npy").read_bytes())
+    raw[-3] ^= 0x55
+    (copy / "scene_000002" / "coord.npy").write_bytes(bytes(raw))  # damaged file
+    run = generate_dataset(parse_config(TINY), copy, range(3))
+    assert run.skipped == [0]
+    assert sorted(m["index"] for m in run.generated) == [1, 2]
+    assert dataset_bytes(copy) == dataset_bytes(out)
+
+
+def test_other_settings_in_the_same_folder_are_refused(full_run):
+    out, _ = full_run
+    from assist3d.errors import DataError
+
+    with pytest.raises(DataError, match="different settings"):
+        generate_dataset(parse_config({**TINY, "render": {**TINY["render"], "voxel_size": 0.05}}), out, range(3))
+
+
+def test_sigkill_mid_run_then_rerun_gives_the_uninterrupted_dataset(full_run, tmp_path):
+    out, _ = full_run
+    cfg_file = tmp_path / "tiny.yaml"
+    cfg_file.write_text(yaml.safe_dump(TINY))
+    target = tmp_path / "killed"
+    cmd = [sys.executable, "-m", "assist3d", "-q", "generate", "--out", str(target), "--num-scenes", "3",
+           "--config", str(cfg_file)]
+    env = dict(os.environ)
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None:
+        if (target / "scene_000000" / "meta.json").is_file():
+            break
+        time.sleep(0.005)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    done = [i for i in range(3) if read_scene_meta(target / scene_name(i)) is not None]
+    assert done != [0, 1, 2], "the run finished before it could be killed"
+    res = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert dataset_bytes(target) == dataset_bytes(out)
+    assert not list(target.rglob(".*.tmp"))
+
+
+def test_generate_show_and_bench_commands(full_run, tmp_path):
+    cfg_file = tmp_path / "tiny.yaml"
+    cfg_file.write_text(yaml.safe_dump(TINY))
+    runner = CliRunner()
+    out = tmp_path / "cli"
+    res = runner.invoke(app, ["generate", "--out", str(out), "--only", "1", "--config", str(cfg_file), "--ply",
+                              "--verify", "--json"])
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.stdout.strip().splitlines()[-1])
+    assert summary["generated"] == 1 and summary["failed_checks"] == []
+    assert (out / "scene_000001" / "points.ply").is_file()
+    assert scene_bytes(out / "scene_000001") == scene_bytes(full_run[0] / "scene_000001")
+    png = tmp_path / "p.png"
+    res = runner.invoke(app, ["show", str(out), "--out", str(png)])
+    assert res.exit_code == 0, res.output
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
+    bench = run_benchmark(scenes=2, cfg=parse_config(TINY))
+    assert set(bench) >= {"scenes", "seconds_per_scene", "stages", "peak_memory_mb"}
+    assert set(bench["seconds_per_scene"]) == {"median", "max"}
+    assert set(bench["stages"]) == {"select", "layout", "assemble", "render", "fuse", "write"}
+    assert bench["scenes"] == 2 and 0 < bench["peak_memory_mb"] < 4000
