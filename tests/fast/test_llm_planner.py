@@ -62,7 +62,7 @@ WALL = PlanRequest("wall", (_asset(5, "Painting", "picture", (0.9, 0.04, 0.6), (
                             _asset(6, "Clock", "clock", (0.3, 0.05, 0.3), ("wall",))), ROOM, placed=(SOFA,))
 TABLE = PlacedInstance(9, "proc:table/0", "table", "floor", _pose(2.5, 2.0))
 ONTOP = PlanRequest("on:9", (_asset(7, "Lamp", "lamp", (0.2, 0.2, 0.4), ("obj",)),
-                             _asset(8, "Mug", "cup", (0.08, 0.08, 0.1), ("obj",))), ROOM, placed=(TABLE,),
+                             _asset(8, "Mug", "cup", (0.08, 0.08, 0.1), ("obj",))), ROOM, placed=(SOFA, TABLE),
                     support=TABLE)
 
 GOOD_FLOOR = json.dumps({"objects": [
@@ -208,6 +208,12 @@ def test_wall_and_on_top_groups(secret_env, tmp_path):
         plan, _ = _plan(_cfg(srv, tmp_path), ONTOP)
     assert plan.planner == f"llm:{MODEL}" and plan.stats["repairs"] == 0
     assert plan.order[1].relations == (Relation("on", 9, (), True), Relation("left_of", 0))
+    # "on" must name the support, even though the sofa (id 4) is a placed instance too
+    wrong = ontop.replace('"target": 9}]}', '"target": 4}]}', 1)
+    with FakeServer([Step(wrong)]) as srv:
+        plan, _ = _plan(_cfg(srv, tmp_path / "b"), ONTOP)
+    assert "'on' target 4 is not the support's id (valid: 9)" in srv.requests[1]["json"]["messages"][-1]["content"]
+    assert plan.order[0].relations == () and plan.planner == f"llm:{MODEL}"
 
 
 @pytest.mark.parametrize("step", [Step(GOOD_FLOOR + " " * 5000), Step(endless=True)], ids=["length", "streamed"])

@@ -188,10 +188,12 @@ def _check_relation(r: Any, idx: int, kind: str, pos_of: dict[int, int], placed_
         if not _is_int(t):
             return None, f"object {idx}: relation {name!r} needs an integer 'target'"
         if name in CROSS_GROUP:
-            if t not in placed_ids:
-                ids = sorted(placed_ids)
-                return None, (f"object {idx}: {name!r} target {t} is not a placed instance id "
-                              f"(placed ids: {ids if ids else 'none'})")
+            allowed = _cross_targets(name, request) & placed_ids
+            if t not in allowed:
+                ids = sorted(allowed)
+                what = "the support's id" if name == "on" else "the id of a placed floor object"
+                listing = ", ".join(map(str, ids[:20])) + (", ..." if len(ids) > 20 else "") if ids else "none"
+                return None, f"object {idx}: {name!r} target {t} is not {what} (valid: {listing})"
             target = t
         elif t == idx:
             return None, f"object {idx}: relation {name!r} refers to the object itself"
@@ -218,3 +220,10 @@ def _check_relation(r: Any, idx: int, kind: str, pos_of: dict[int, int], placed_
                 return None, (f"object {idx} is {tall:.2f} m tall: its bottom edge must be at most "
                               f"{request.room.height - tall:.2f} m above the floor, not {value[0]:g} m")
     return Relation(name, target, value, hard), None
+
+
+def _cross_targets(name: str, request: PlanRequest) -> set[int]:
+    """Instance ids an ``on`` (the support) or ``above`` (placed floor objects) relation may name."""
+    if name == "on":
+        return {request.support.id} if request.support is not None else {p.id for p in request.placed}
+    return {p.id for p in request.placed if p.group == "floor"}
