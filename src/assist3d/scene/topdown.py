@@ -60,6 +60,7 @@ def render_topdown(layout: SceneLayout, catalog: Catalog, path: str | Path, *, t
         ax.plot(seg[:, 0], seg[:, 1], color=color, linewidth=5 if op.kind == "door" else 4, solid_capstyle="butt",
                 zorder=1)
     counts = {"floor": 0, "wall": 0, "obj": 0}
+    parents = {i.parent for i in layout.instances if i.parent is not None}
     for inst in sorted(layout.instances, key=lambda i: (GROUP_STYLE[_kind(i.group)][2], i.id)):
         kind = _kind(inst.group)
         counts[kind] += 1
@@ -79,7 +80,10 @@ def render_topdown(layout: SceneLayout, catalog: Catalog, path: str | Path, *, t
         length = 0.5 * min(float(size[0]), float(size[1])) + 0.08
         ax.annotate("", xy=centre + front * length, xytext=centre, zorder=z + 0.1,
                     arrowprops={"arrowstyle": "->", "color": edge, "linewidth": 0.8})
-        ax.text(centre[0], centre[1], inst.class_name, fontsize=4.5, ha="center", va="center", zorder=z + 0.2,
+        label_at = centre
+        if inst.id in parents:  # keep the support's name clear of the objects drawn on it
+            label_at = centre + pose[:2, :2] @ np.array([0.0, 0.5 * float(size[1]) - 0.06])
+        ax.text(label_at[0], label_at[1], inst.class_name, fontsize=4.5, ha="center", va="center", zorder=z + 0.2,
                 clip_on=True)
     margin = 0.3
     ax.set_xlim(lo[0] - margin, hi[0] + margin)
