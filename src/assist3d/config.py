@@ -152,7 +152,7 @@ class LLMConfig(_Section):
     json_mode: bool = Field(True, description="Ask for response_format json_object (dropped silently when the "
                                               "server rejects it).")
     max_failures: int = Field(3, ge=1, description="Consecutive endpoint failures (after retries) before the LLM "
-                                                   "is skipped for the rest of the run and the rules take over.")
+                                                   "is skipped for 5 minutes and the rules take over.")
     prompt_dir: str | None = Field(None, description="Folder of edited prompt templates overriding the built-in "
                                                      "ones file by file; None = built-in.")
 

@@ -281,13 +281,21 @@ def test_json_mode_rejected_is_dropped_silently(secret_env, tmp_path):
     assert plan2.planner in ("rules", f"llm:{MODEL}")
 
 
-def test_connection_refused_and_circuit_breaker(secret_env, tmp_path):
-    with FakeServer([Step(status=500)]) as srv:
-        planner = LLMPlanner(_cfg(srv, tmp_path, retries=0, max_failures=2), fallback=ReversePlanner())
-        plans = [planner.plan(r, rng=np.random.default_rng(0)) for r in (FLOOR, WALL, ONTOP)]
-    assert [p.planner for p in plans] == ["rules"] * 3
-    assert len(srv.requests) == 2  # the third group never called the failing endpoint
-    assert plans[2].stats["llm_calls"] == 0 and "skipped" in plans[2].notes[0]
+def test_circuit_breaker_spans_planners_and_probes_after_cooldown(secret_env, tmp_path, monkeypatch):
+    from assist3d.llm import client as client_mod
+
+    with FakeServer([Step(status=500), Step(status=500), Step(GOOD_FLOOR)]) as srv:
+        cfg = _cfg(srv, tmp_path, retries=0, max_failures=2)
+        planner = LLMPlanner(cfg, fallback=ReversePlanner())
+        plans = [planner.plan(r, rng=np.random.default_rng(0)) for r in (FLOOR, WALL)]
+        # a new planner (as build_layout makes for the next scene) sees the open breaker too
+        plans.append(LLMPlanner(cfg, fallback=ReversePlanner()).plan(ONTOP, rng=np.random.default_rng(0)))
+        assert [p.planner for p in plans] == ["rules"] * 3
+        assert len(srv.requests) == 2  # the third group never called the failing endpoint
+        assert plans[2].stats["llm_calls"] == 0 and "skipped" in plans[2].notes[0]
+        monkeypatch.setattr(client_mod, "BREAKER_COOLDOWN_S", 0.0)  # cool-down over: one probe goes through
+        probe = LLMPlanner(cfg, fallback=ReversePlanner()).plan(FLOOR, rng=np.random.default_rng(0))
+    assert probe.planner == f"llm:{MODEL}" and len(srv.requests) == 3
 
 
 def test_cache_makes_rerun_free_and_identical(secret_env, tmp_path, monkeypatch):

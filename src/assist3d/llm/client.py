@@ -12,8 +12,9 @@ What it guarantees:
   ``Content-Length`` before), never after.
 * **Bounded concurrency across processes**: ``concurrency`` lock files per endpoint under the
   cache folder, taken with ``fcntl.flock`` (released by the OS if a worker dies).
-* **Circuit breaker**: after ``max_failures`` consecutive failed calls the client stops calling
-  the endpoint for the rest of its life (cached answers are still served).
+* **Circuit breaker**: after ``max_failures`` consecutive failed calls, every client of that
+  endpoint in the process stops calling it for ``BREAKER_COOLDOWN_S`` (then one probe call is let
+  through); cached answers are still served. A new planner per scene shares the state.
 * **Secrets**: the API key is read from the environment variable named by ``api_key_env`` at
   request time and only ever placed in the ``Authorization`` header: never logged, cached, or
   part of an error message.
@@ -46,6 +47,22 @@ log = logging.getLogger(__name__)
 RETRY_STATUS = frozenset({408, 409, 425, 429, 500, 502, 503, 504})
 RETRY_AFTER_CAP_S = 30.0
 _CHUNK = 65536
+
+
+BREAKER_COOLDOWN_S = 300.0
+
+
+@dataclass
+class _EndpointState:
+    """What a process has learnt about one endpoint: its failure streak and json_mode support."""
+
+    json_mode: bool
+    failures: int = 0
+    last_failure: float = 0.0
+
+
+_STATES: dict[tuple[str, str, str], _EndpointState] = {}
+_STATES_LOCK = threading.Lock()
 
 
 @dataclass
@@ -127,14 +144,27 @@ class ChatClient:
         self.model = model
         self.endpoint = parse_endpoint(cfg.base_url)
         self.cache = cache if cache is not None else ResponseCache(cfg.cache_dir)
-        self.json_mode = cfg.json_mode
-        self.consecutive_failures = 0
         self._lock_dir = self.cache.folder / "locks" / stable_hash(self.endpoint.display)
+        # shared by every client of this endpoint, model and cache in the process (one per scene)
+        key = (self.endpoint.display, model, str(self.cache.folder))
+        with _STATES_LOCK:
+            self._state = _STATES.setdefault(key, _EndpointState(json_mode=cfg.json_mode))
 
     # ------------------------------------------------------------------------------------------
     @property
+    def json_mode(self) -> bool:
+        return self._state.json_mode
+
+    @property
+    def consecutive_failures(self) -> int:
+        return self._state.failures
+
+    @property
     def disabled(self) -> bool:
-        return self.consecutive_failures >= self.cfg.max_failures
+        """True while the circuit breaker is open: ``max_failures`` failed calls in a row, and
+        less than ``BREAKER_COOLDOWN_S`` since the last one (then one probe call is let through)."""
+        st = self._state
+        return st.failures >= self.cfg.max_failures and time.monotonic() - st.last_failure < BREAKER_COOLDOWN_S
 
     def complete(self, messages: list[dict[str, Any]], *, usage: Usage | None = None,
                  use_cache: bool = True) -> ChatAnswer:
@@ -159,9 +189,11 @@ class ChatClient:
             try:
                 answer = self._call(messages, usage)
             except LLMError:
-                self.consecutive_failures += 1
+                with _STATES_LOCK:
+                    self._state.failures += 1
+                    self._state.last_failure = time.monotonic()
                 raise
-            self.consecutive_failures = 0
+            self._state.failures = 0
             usage.prompt_tokens += answer.prompt_tokens
             usage.completion_tokens += answer.completion_tokens
             secret = self._api_key()
@@ -211,7 +243,7 @@ class ChatClient:
                     if status in (400, 422) and json_sent:
                         log.info("%s: HTTP %d with response_format; asking again without it (%s)",
                                  self.endpoint.display, status, snippet)
-                        self.json_mode = False
+                        self._state.json_mode = False
                         continue
                     if status not in RETRY_STATUS:
                         raise LLMError(f"{self.endpoint.display}: HTTP {status} ({snippet})")
