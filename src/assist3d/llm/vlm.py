@@ -32,9 +32,6 @@ from .views import render_point_views
 
 log = logging.getLogger(__name__)
 
-_CLIENTS: dict[tuple[str, str, str | None], ChatClient] = {}
-
-
 def vlm_model(cfg: LLMConfig) -> str | None:
     return cfg.vlm_model or cfg.model
 
@@ -61,13 +58,7 @@ def _client(cfg: LLMConfig, cache: ResponseCache | None) -> ChatClient:
     model = vlm_model(cfg)
     if not cfg.base_url or not model:
         raise ConfigError("the VLM layout score needs llm.base_url and llm.vlm_model (or llm.model)")
-    if cache is not None:
-        return ChatClient(cfg, model=model, cache=cache)
-    key = (cfg.model_dump_json(), model, cfg.cache_dir)
-    client = _CLIENTS.get(key)
-    if client is None:  # one client per configuration, so the circuit breaker spans scenes
-        client = _CLIENTS[key] = ChatClient(cfg, model=model)
-    return client
+    return ChatClient(cfg, model=model, cache=cache)  # the circuit breaker is shared across clients
 
 
 def score_layout(images: list[bytes], cfg: LLMConfig, *, room: str = "",
