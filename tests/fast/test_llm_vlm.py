@@ -162,6 +162,13 @@ def test_vlm_layout_score_of_a_scene_folder(secret_env, tmp_path):
     with FakeServer([Step(GOOD)]) as srv:
         assert vlm_layout_score(scene, _cfg(srv, tmp_path), n_views=2, size=32) == 72.0
     assert len([p for p in srv.requests[0]["json"]["messages"][-1]["content"] if p["type"] == "image_url"]) == 2
+    from assist3d.contracts import Room
+
+    room = Room(((0.0, 0.0), (4.0, 0.0), (4.0, 3.0), (0.0, 3.0)), 2.6)
+    (scene / "layout.json").write_text(json.dumps({"room": room.to_json()}))
+    with FakeServer([Step(GOOD)]) as srv:
+        vlm_layout_score(scene, _cfg(srv, tmp_path), n_views=2, size=32)  # new prompt text: not a cache hit
+    assert "It is a rectangular room, 4.0 x 3.0 m" in srv.requests[0]["json"]["messages"][-1]["content"][0]["text"]
     (scene / "color.npy").write_bytes(b"garbage")
     with pytest.raises(DataError, match="color.npy"):
         vlm_layout_score(scene, _cfg(srv, tmp_path))

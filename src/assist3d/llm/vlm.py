@@ -14,6 +14,7 @@ when no endpoint is configured or the endpoint fails.
 from __future__ import annotations
 
 import base64
+import json
 import logging
 import math
 import time
@@ -23,10 +24,11 @@ from typing import Any
 import numpy as np
 
 from ..config import LLMConfig
+from ..contracts import Room
 from ..errors import ConfigError, DataError, LLMError
 from .cache import ResponseCache
 from .client import ChatClient, Usage
-from .prompts import load_template, render_repair_message
+from .prompts import describe_room, load_template, render_repair_message
 from .schema import parse_json_text
 from .views import render_point_views
 
@@ -138,6 +140,18 @@ def vlm_layout_score(scene_dir: Path, cfg: LLMConfig, *, n_views: int = 4, size:
         return None
     coord, color = load_scene_points(Path(scene_dir))
     images = render_point_views(coord, color, n=n_views, size=size)
-    score, details = score_layout(images, cfg)
+    score, details = score_layout(images, cfg, room=_room_text(Path(scene_dir) / "layout.json"))
     log.info("%s: VLM layout score %s (%s)", scene_dir, score, details.get("reason") or details.get("error", ""))
     return score
+
+
+def _room_text(layout_json: Path) -> str:
+    """A one-line room description from a scene's layout.json, or "" when there is none."""
+    if not layout_json.is_file():
+        return ""
+    try:
+        room = Room.from_json(json.loads(layout_json.read_text(encoding="utf-8"))["room"])
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        log.debug("%s: no room description (%s)", layout_json, e)
+        return ""
+    return f"It is a {describe_room(room)}."
