@@ -313,32 +313,73 @@ def normalize_loaded(loaded: Any, *, rotation: np.ndarray | None = None, size: S
 # --------------------------------------------------------------------------------------------
 
 
-def _clearance(polygon, tri: np.ndarray, zmin_face: np.ndarray, above: np.ndarray, height: float) -> float | None:
-    """Gap from ``height`` up to the lowest face (of ``above``) over ``polygon``, or None.
+@dataclass(frozen=True)
+class _FaceBounds:
+    """Per-face bounds used by clearance queries: (F,) float64 arrays."""
+
+    zmin: np.ndarray
+    xmin: np.ndarray
+    xmax: np.ndarray
+    ymin: np.ndarray
+    ymax: np.ndarray
+
+    @staticmethod
+    def of(tri: np.ndarray) -> "_FaceBounds":
+        return _FaceBounds(tri[:, :, 2].min(1), tri[:, :, 0].min(1), tri[:, :, 0].max(1),
+                           tri[:, :, 1].min(1), tri[:, :, 1].max(1))
+
+
+def _clearance(polygon, tri: np.ndarray, fb: _FaceBounds, height: float, band: float) -> float | None:
+    """Gap from ``height`` up to the lowest face starting more than ``band`` above it over
+    ``polygon``, or None.
 
     A face is over the polygon when its centroid or one of its vertices is strictly inside it
     (the centroid catches a board above whose corners lie exactly on the polygon's outline).
     """
     import shapely
 
-    if len(above) == 0:
-        return None
     x0, y0, x1, y1 = polygon.bounds
-    t = tri[above][:, :, :2]
-    near = (t[:, :, 0].max(1) > x0) & (t[:, :, 0].min(1) < x1) & (t[:, :, 1].max(1) > y0) & (t[:, :, 1].min(1) < y1)
-    above, t = above[near], t[near]
+    above = np.nonzero((fb.zmin > height + band) & (fb.xmax > x0) & (fb.xmin < x1) & (fb.ymax > y0) & (fb.ymin < y1))[0]
     if len(above) == 0:
         return None
+    t = tri[above][:, :, :2]
     pts = np.concatenate([t, t.mean(axis=1, keepdims=True)], axis=1).reshape(-1, 2)
     inside = shapely.contains_xy(polygon, pts[:, 0], pts[:, 1]).reshape(-1, 4).any(1)
     if not inside.any():
         return None
-    return float(zmin_face[above][inside].min() - height)
+    return float(fb.zmin[above][inside].min() - height)
+
+
+def _large_patches(faces: np.ndarray, tri: np.ndarray, area: np.ndarray, min_area: float) -> np.ndarray:
+    """The faces (indices) of ``faces`` in edge/vertex-connected patches of at least ``min_area``.
+
+    Connectivity uses corner positions quantised to 0.1 mm, so meshes whose vertices were split
+    (per UV or normal) still connect.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n = len(faces)
+    if n <= 1:
+        return faces if n and area[faces].sum() >= min_area else faces[:0]
+    q = np.round(tri[faces][:, :, :2].reshape(-1, 2) / 1e-4).astype(np.int64)
+    key = (q[:, 0] << 32) ^ (q[:, 1] & 0xFFFFFFFF)
+    _, corner_id = np.unique(key, return_inverse=True)
+    corner_id = corner_id.reshape(-1)
+    m = int(corner_id.max()) + 1
+    # bipartite graph: face nodes 0..n-1, corner nodes n..n+m-1
+    rows = np.repeat(np.arange(n), 3)
+    graph = coo_matrix((np.ones(3 * n, dtype=np.int8), (rows, corner_id + n)), shape=(n + m, n + m))
+    _, labels_all = connected_components(graph, directed=False)
+    labels = labels_all[:n]
+    patch_area = np.bincount(labels, weights=area[faces])
+    return faces[patch_area[labels] >= min_area]
 
 
 def extract_supports(mesh: MeshData, *, min_area: float = 0.01, min_height: float = 0.05,
                      max_tilt_deg: float = 10.0, height_tol: float = 0.01, min_clearance: float = 0.05,
-                     max_surfaces: int = 8, simplify: float = 0.005) -> tuple[SupportSurface, ...]:
+                     max_surfaces: int = 8, simplify: float = 0.005,
+                     max_union_faces: int = 20000) -> tuple[SupportSurface, ...]:
     """Horizontal upward surfaces of a canonical mesh that objects can rest on.
 
     Up-facing faces (normal within ``max_tilt_deg`` of +z) are clustered by height (a new cluster
@@ -349,6 +390,10 @@ def extract_supports(mesh: MeshData, *, min_area: float = 0.01, min_height: floa
     ``clearance`` is the gap to the lowest face that lies entirely above the surface with a vertex
     over its polygon (``None`` if nothing is above); surfaces with less than ``min_clearance`` are
     dropped (enclosed or covered). At most ``max_surfaces``, largest first, returned by height.
+
+    Cost is bounded: connected patches of a cluster smaller than ``min_area`` (leaves of a plant)
+    are dropped before the polygon union, only the ``2 * max_surfaces`` largest clusters are
+    unioned, and at most ``max_union_faces`` triangles per cluster.
     """
     import shapely
 
@@ -375,15 +420,20 @@ def extract_supports(mesh: MeshData, *, min_area: float = 0.01, min_height: floa
     candidates = [(s, e) for s, e, a in zip(starts, ends, cluster_area) if a >= min_area]
     if not candidates:
         return ()
-    zmin_face = tri[:, :, 2].min(1)
+    fb = _FaceBounds.of(tri)
     surfaces: list[tuple[float, SupportSurface]] = []
-    for s, e in candidates:
-        faces_c = order[s:e]
+    # largest clusters first, at most 2 * max_surfaces of them (a bounded amount of polygon work)
+    candidates.sort(key=lambda se: -float(area[order[se[0]:se[1]]].sum()))
+    for s, e in candidates[:2 * max_surfaces]:
+        faces_c = _large_patches(order[s:e], tri, area, min_area)
+        if len(faces_c) == 0:
+            continue
+        if len(faces_c) > max_union_faces:  # keep the largest triangles: the outline barely changes
+            faces_c = faces_c[np.argsort(-area[faces_c], kind="stable")[:max_union_faces]]
         height = float(np.average(zc[faces_c], weights=area[faces_c]))
         polys = shapely.polygons(tri[faces_c][:, :, :2])
         merged = shapely.union_all(polys)
         parts = [merged] if merged.geom_type == "Polygon" else list(getattr(merged, "geoms", []))
-        above = np.nonzero(zmin_face > height + height_tol)[0]
         for part in parts:
             if part.geom_type != "Polygon" or part.area < min_area:
                 continue
@@ -391,7 +441,7 @@ def extract_supports(mesh: MeshData, *, min_area: float = 0.01, min_height: floa
             if outline.is_empty or outline.area < min_area:
                 continue
             outline = shapely.geometry.polygon.orient(outline, 1.0)
-            clearance = _clearance(outline, tri, zmin_face, above, height)
+            clearance = _clearance(outline, tri, fb, height, height_tol)
             if clearance is not None and clearance < min_clearance:
                 continue
             coords = tuple((round(float(x), 6), round(float(y), 6)) for x, y in np.asarray(outline.exterior.coords)[:-1])
@@ -408,7 +458,8 @@ def support_at_height(mesh: MeshData, height: float, *, band: float = 0.03, min_
 
     The polygon is the convex hull of the vertices within ``band`` metres of ``height`` when that
     covers at least ``min_fraction`` of the footprint, else the bounding-box footprint shrunk to
-    ``margin``. ``clearance`` as in :func:`extract_supports`.
+    ``margin``. ``clearance`` as in :func:`extract_supports`, ignoring faces less than ``band``
+    above ``height`` (the padded or curved surface itself).
     """
     import shapely
 
@@ -423,8 +474,7 @@ def support_at_height(mesh: MeshData, height: float, *, band: float = 0.03, min_
             poly = hull.simplify(0.005, preserve_topology=True)
     poly = shapely.geometry.polygon.orient(poly, 1.0)
     tri = v[mesh.faces.astype(np.int64)]
-    zmin_face = tri[:, :, 2].min(1)
-    above = np.nonzero(zmin_face > height + 0.01)[0]
-    clearance = _clearance(poly, tri, zmin_face, above, height)
+    # faces just above the given height are the surface itself (cushions, a mattress's bulge)
+    clearance = _clearance(poly, tri, _FaceBounds.of(tri), float(height), band)
     coords = tuple((round(float(x), 6), round(float(y), 6)) for x, y in np.asarray(poly.exterior.coords)[:-1])
     return SupportSurface(height=float(height), polygon=coords, clearance=clearance)
