@@ -156,19 +156,21 @@ def build_library(root: str | Path, *, count: int, seed: int, workers: int = 1) 
     # Building is cheap (a few ms per asset); writing is dominated by each file's fsync, which
     # releases the GIL, so a few writer threads overlap the waits. The index is sorted by id, so
     # the result does not depend on the order in which writes finish.
-    with ThreadPoolExecutor(max_workers=WRITER_THREADS) as writers:
-        pending = []
-        if workers == 1:
-            for i in range(count):
-                pending.append(writers.submit(catalog.add, *build_asset(seed, i)))
-        else:
-            step = max(1, min(64, count // (workers * 4) or 1))
-            chunks = [(seed, list(range(a, min(count, a + step)))) for a in range(0, count, step)]
-            with ProcessPoolExecutor(max_workers=workers) as pool:
-                for built in pool.map(_build_chunk, chunks):
-                    pending.extend(writers.submit(catalog.add, record, mesh) for record, mesh in built)
-        for fut in pending:
-            fut.result()
+    if workers == 1:
+        with ThreadPoolExecutor(max_workers=WRITER_THREADS) as writers:
+            pending = [writers.submit(catalog.add, *build_asset(seed, i)) for i in range(count)]
+            for fut in pending:
+                fut.result()
+    else:
+        step = max(1, min(64, count // (workers * 4) or 1))
+        chunks = [(seed, list(range(a, min(count, a + step)))) for a in range(0, count, step)]
+        # the process pool forks its workers (on map) before any writer thread exists
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            results = pool.map(_build_chunk, chunks)
+            with ThreadPoolExecutor(max_workers=WRITER_THREADS) as writers:
+                pending = [writers.submit(catalog.add, record, mesh) for built in results for record, mesh in built]
+                for fut in pending:
+                    fut.result()
     catalog.save()
     log.info("procedural library: %d assets (seed %d) in %s, %.1f s", count, seed, root, time.perf_counter() - t0)
     return catalog

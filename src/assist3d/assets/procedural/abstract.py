@@ -53,6 +53,15 @@ def _primitive(rng: np.random.Generator, scale: float) -> mf.Manifold:
     return m.rotate(tuple(float(a) for a in ang)).translate(tuple(float(x) for x in rng.normal(0, scale * 0.25, 3)))
 
 
+def _has_slivers(solid: mf.Manifold) -> bool:
+    """Whether a boolean result holds near-zero-area triangles (they would break validity checks)."""
+    m = solid.to_mesh()
+    v = np.asarray(m.vert_properties, dtype=np.float64)[:, :3]
+    t = v[np.asarray(m.tri_verts, dtype=np.int64)]
+    area = 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
+    return bool(area.min() < 1e-9)
+
+
 @family("csg_shape", ("obj",), weight=1.5)
 def csg_shape(rng: np.random.Generator) -> Shape:
     """Boolean unions, differences and intersections of random boxes, cylinders and spheres."""
@@ -68,7 +77,8 @@ def csg_shape(rng: np.random.Generator) -> Shape:
         op = rng.random()
         trial = solid + p if op < 0.5 else solid - p if op < 0.85 else solid ^ p
         # keep one connected solid with no internal voids (a void is a component with negative volume)
-        if trial.num_tri() > 0 and trial.volume() > 0.05 * solid.volume() and len(trial.decompose()) == 1:
+        if (trial.num_tri() > 0 and trial.volume() > 0.05 * solid.volume() and len(trial.decompose()) == 1
+                and not _has_slivers(trial)):
             solid = trial
     b.manifold(solid, colors)
     return b.finish("csg shape")
