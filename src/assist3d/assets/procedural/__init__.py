@@ -28,7 +28,8 @@ import numpy as np
 from ...contracts import AssetRecord, MeshData, SupportSurface
 from ...errors import AssetError
 from ..catalog import Catalog
-from . import abstract, appliances, seating, small_home, small_misc, storage, tables, wall  # noqa: F401  (register)
+from . import (abstract, appliances, household, seating, small_home, small_misc, storage, tables,  # noqa: F401
+               wall)  # importing a module registers its families
 from ._build import Shape
 from ._registry import FAMILIES, Family
 
