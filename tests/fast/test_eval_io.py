@@ -159,3 +159,16 @@ def test_ood_default_feature_runs(tmp_path):
     ds = open_dataset(f"array:{gt}")
     r = evaluate_dataset(ds, pred, ood_reference=ds)
     assert r.ood is not None and r.ood.num_gt == 0  # nothing is farther than itself
+
+
+def test_workers_give_the_same_result(tmp_path):
+    gt, pred = tmp_path / "gt", tmp_path / "pred"
+    gt.mkdir()
+    for k in range(3):
+        a = _array_scene(gt / f"s{k}.npy", seed=k)
+        masks = _gt_masks(a)
+        save_predictions(pred / f"s{k}.npz", masks[: k + 1], np.linspace(0.9, 0.5, k + 1).astype(np.float32))
+    ds = open_dataset(f"array:{gt}")
+    one = evaluate_dataset(ds, pred).to_dict(per_scene=True)
+    two = evaluate_dataset(ds, pred, workers=2).to_dict(per_scene=True)
+    assert one == two and one["AR50"] == pytest.approx(6 / 9)

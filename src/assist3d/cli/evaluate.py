@@ -45,6 +45,7 @@ def evaluate(
                                                                              "ScanNet v2) for out-of-domain AR."),
     feature: Optional[str] = typer.Option(None, "--feature", help="Shape feature for --ood-reference as MODULE:FUNCTION "
                                                                   "taking (n, 3) points (default: assist3d's shape descriptor)."),
+    workers: int = typer.Option(1, "--workers", "-w", min=1, help="Read and match scenes in this many processes."),
 ) -> None:
     """Score instance predictions class-agnostically, exactly like the ScanNet benchmark script."""
     from rich.console import Console
@@ -62,7 +63,7 @@ def evaluate(
         task = bar.add_task(f"evaluating {dataset.name}", total=len(dataset))
         result = evaluate_dataset(
             dataset, pred, allow_missing=allow_missing, ood_reference=reference, feature=fn,
-            progress=lambda i, n: bar.update(task, completed=i),
+            progress=lambda i, n: bar.update(task, completed=i), workers=workers,
         )
     if as_json:
         typer.echo(json.dumps(result.to_dict(per_scene=per_scene)))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 import math
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
@@ -71,6 +72,25 @@ def read_scene_predictions(path: Path, n_points: int) -> tuple[np.ndarray, np.nd
     return load_predictions(path, n_points)
 
 
+def _score_scene(job: tuple) -> tuple[SceneMatches, np.ndarray | None]:
+    """Read one scene and its predictions, match them, and pick its out-of-domain objects."""
+    dataset, sid, path, feature, ood_mean, d_max = job
+    sample = dataset.load(sid)
+    if path is None:
+        masks, scores = np.zeros((0, len(sample)), bool), np.zeros(0, np.float32)
+    else:
+        masks, scores = read_scene_predictions(path, len(sample))
+    m = match_scene(sample.instance, masks, scores, valid=sample.valid, scene_id=sid)
+    if ood_mean is None:
+        return m, None
+    ids, feats = instance_features(sample, feature)
+    if len(ids) == 0:
+        return m, ids
+    if feats.shape[1] != len(ood_mean):
+        raise DataError(f"scene {sid}: feature dimension {feats.shape[1]} differs from the reference's {len(ood_mean)}")
+    return m, ids[np.linalg.norm(feats.astype(np.float64) - ood_mean, axis=1) > d_max]
+
+
 def evaluate_dataset(
     dataset: SceneDataset,
     pred_dir: str | Path,
@@ -79,12 +99,15 @@ def evaluate_dataset(
     ood_reference: SceneDataset | None = None,
     feature: FeatureFn = default_feature,
     progress: Callable[[int, int], None] | None = None,
+    workers: int = 1,
 ) -> EvaluationResult:
     """Score ``pred_dir`` (``<scene_id>.npz`` or ``.txt`` per scene) against ``dataset``.
 
     Missing prediction files raise :class:`DataError` listing them unless ``allow_missing``, in
     which case those scenes count as having no predictions. ``ood_reference``: a dataset whose
     objects define "in domain"; the result then carries AR/AR50/AR25 on the out-of-domain objects.
+    ``workers > 1`` reads and matches scenes in that many processes (the dataset and ``feature``
+    must then be picklable, e.g. module-level functions); results do not depend on it.
     """
     pred_dir = Path(pred_dir)
     if not pred_dir.is_dir():
@@ -108,27 +131,27 @@ def evaluate_dataset(
         ood_mean, d_max = ood_threshold(ref)
         log.info("out-of-domain reference %s: %d objects, d_max %.4f", ood_reference.name, len(ref), d_max)
 
+    jobs = [(dataset, sid, paths[sid], feature if ood_mean is not None else None, ood_mean, d_max)
+            for sid in dataset.scene_ids]
     matches: list[SceneMatches] = []
     per_scene: dict[str, Metrics] = {}
     selected: dict[str, np.ndarray] = {}
-    for i, sid in enumerate(dataset.scene_ids):
-        sample = dataset.load(sid)
-        p = paths[sid]
-        if p is None:
-            masks, scores = np.zeros((0, len(sample)), bool), np.zeros(0, np.float32)
-        else:
-            masks, scores = read_scene_predictions(p, len(sample))
-        m = match_scene(sample.instance, masks, scores, valid=sample.valid, scene_id=sid)
+
+    def collect(i: int, m: SceneMatches, chosen: np.ndarray | None) -> None:
         matches.append(m)
-        per_scene[sid] = summarize([m])
-        if ood_mean is not None:
-            ids, feats = instance_features(sample, feature)
-            if len(ids):
-                if feats.shape[1] != len(ood_mean):
-                    raise DataError(f"scene {sid}: feature dimension {feats.shape[1]} differs from the reference's {len(ood_mean)}")
-                selected[sid] = ids[np.linalg.norm(feats.astype(np.float64) - ood_mean, axis=1) > d_max]
+        per_scene[m.scene_id] = summarize([m])
+        if chosen is not None:
+            selected[m.scene_id] = chosen
         if progress is not None:
-            progress(i + 1, len(dataset))
+            progress(i + 1, len(jobs))
+
+    if workers <= 1 or len(jobs) <= 1:
+        for i, job in enumerate(jobs):
+            collect(i, *_score_scene(job))
+    else:
+        with ProcessPoolExecutor(max_workers=min(workers, len(jobs))) as pool:
+            for i, (m, chosen) in enumerate(pool.map(_score_scene, jobs)):
+                collect(i, m, chosen)
     overall = summarize(matches)
     ood = recall_on(matches, selected) if ood_reference is not None else None
     return EvaluationResult(dataset=f"{dataset.format}:{dataset.root}", overall=overall, per_scene=per_scene, ood=ood, missing=missing)
