@@ -149,3 +149,20 @@ def test_mesh_baseline_sees_hidden_surfaces_at_matching_density(scene, rendered)
     # every sample lies on its triangle's plane
     inst5 = s.coord[s.instance == 5]
     assert inst5[:, 2].min() >= 0.1 - 1e-4 and inst5[:, 2].max() <= 0.4 + 1e-4
+
+
+def test_one_per_voxel_pickers_keep_exactly_one_row_per_key_and_vary_with_salt():
+    from assist3d.render.voxel import pick_one_per_voxel, pick_one_per_voxel_scan
+
+    rng = np.random.default_rng(0)
+    keys = np.repeat(rng.integers(0, 500, 300), rng.integers(1, 9, 300))  # runs, with repeats far apart
+    for pick in (pick_one_per_voxel, pick_one_per_voxel_scan):
+        a = pick(keys, 12345)
+        assert np.array_equal(np.sort(keys[a]), np.unique(keys))
+        assert np.all(np.diff(keys[a]) > 0)  # sorted by voxel
+        assert np.array_equal(a, pick(keys, 12345))
+        assert not np.array_equal(a, pick(keys, 999))
+    # within a voxel the choice is spread over its rows, not always the first one
+    keys = np.zeros(64, np.int64)
+    chosen = {int(pick_one_per_voxel(keys, s)[0]) for s in range(1, 200)}
+    assert len(chosen) > 20

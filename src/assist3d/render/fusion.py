@@ -21,7 +21,7 @@ from ..contracts import Camera, SceneMesh
 from .camera import pixel_directions, rotate_directions
 from .raycast import RayCaster
 from .sensor import apply_depth_sensor, sensor_enabled
-from .voxel import VoxelGrid, pick_one_per_voxel
+from .voxel import VoxelGrid, pick_one_per_voxel, pick_one_per_voxel_scan
 
 log = logging.getLogger(__name__)
 
@@ -92,7 +92,7 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
             col += center[j]
             pts[:, j] = col
         keys = grid.keys(pts)
-        keep = pick_one_per_voxel(keys, int(salts[i]))
+        keep = pick_one_per_voxel_scan(keys, int(salts[i]))
         return keys[keep], pts[keep], fh[keep], counts, len(pix)
 
     t0 = time.perf_counter()

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import RenderError
 
-__all__ = ["VoxelGrid", "pick_one_per_voxel"]
+__all__ = ["VoxelGrid", "pick_one_per_voxel", "pick_one_per_voxel_scan"]
 
 
 @dataclass(frozen=True)
@@ -58,6 +58,16 @@ class VoxelGrid:
         return key
 
 
+def _mix(keys: np.ndarray, salt: int) -> np.ndarray:
+    """(N,) uint64 well-mixed hash of int64 keys and a salt (splitmix64 finaliser)."""
+    x = keys.astype(np.uint64) + np.uint64(int(salt) & 0xFFFFFFFFFFFFFFFF)
+    x *= np.uint64(0xBF58476D1CE4E5B9)
+    x ^= x >> np.uint64(31)
+    x *= np.uint64(0x94D049BB133111EB)
+    x ^= x >> np.uint64(29)
+    return x
+
+
 def _bits(n: int) -> int:
     return max(1, int(n - 1).bit_length())
 
@@ -76,8 +86,7 @@ def pick_one_per_voxel(keys: np.ndarray, salt: int) -> np.ndarray:
     if int(keys.max()).bit_length() + rb > 63:
         raise RenderError(f"voxel keys too wide to pack with {n} rows; raise render.voxel_size")
     mask = np.uint64((1 << rb) - 1)
-    mult = np.uint64((int(salt) | 1) & 0xFFFFFFFFFFFFFFFF)
-    h = ((keys.astype(np.uint64) * mult) >> np.uint64(29)) & mask
+    h = _mix(keys, salt) & mask
     packed = (keys.astype(np.uint64) << np.uint64(rb)) | (np.arange(n, dtype=np.uint64) ^ h)
     packed.sort()
     vox = packed >> np.uint64(rb)
@@ -85,5 +94,21 @@ def pick_one_per_voxel(keys: np.ndarray, salt: int) -> np.ndarray:
     first[1:] = vox[1:] != vox[:-1]
     win = packed[first]
     wvox = win >> np.uint64(rb)
-    hw = ((wvox * mult) >> np.uint64(29)) & mask
+    hw = _mix(wvox.astype(np.int64), salt) & mask
     return ((win & mask) ^ hw).astype(np.int64)
+
+
+def pick_one_per_voxel_scan(keys: np.ndarray, salt: int) -> np.ndarray:
+    """Like :func:`pick_one_per_voxel` for keys in image scan order, where neighbouring pixels
+    mostly share a voxel: each run of equal consecutive keys first contributes one pseudo-random
+    member, and only those (~5x fewer at 2 cm and 640 x 480) are sorted."""
+    n = len(keys)
+    if n == 0:
+        return np.zeros(0, np.int64)
+    change = np.flatnonzero(keys[1:] != keys[:-1]) + 1
+    starts = np.zeros(len(change) + 1, np.int64)
+    starts[1:] = change
+    lengths = np.diff(np.append(starts, n))
+    h = _mix(keys[starts], ~int(salt))
+    cand = starts + (h % lengths.astype(np.uint64)).astype(np.int64)
+    return cand[pick_one_per_voxel(keys[cand], salt)]
