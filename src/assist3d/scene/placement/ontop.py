@@ -6,7 +6,9 @@ inside each polygon (step = a tenth of the surface's smaller side, between 2 and
 ``rotations`` yaws turned by a seeded random offset per object. A candidate's footprint must lie
 inside the polygon, its height must fit under the surface's clearance and the ceiling, and its
 3-D box must not collide with the other objects on the support nor with anything else placed
-(wall objects overhead, neighbours). The base sits exactly at the surface height.
+(wall objects overhead, neighbours), and the support's mesh must really carry it there
+(:mod:`.surface`: the mesh top under the footprint is at the surface height and nothing of the
+mesh is in the way above). The base sits exactly at the surface height.
 """
 
 from __future__ import annotations
@@ -15,11 +17,12 @@ import numpy as np
 import shapely
 
 from ...config import LayoutConfig
-from ...contracts import PlacedInstance, Room, SupportSurface
+from ...contracts import MeshData, PlacedInstance, Room, SupportSurface
 from ..geometry import InstanceBoxes, boxes_collide, pose_xyz_yaw, rect_corners, rects_in_polygon, world_bounds
 from .common import Item, RelationState, order_candidates, target_box
 from .scoring import Candidates
 from .search import Choice
+from .surface import surface_map
 
 EPS = 1e-6
 
@@ -30,7 +33,7 @@ class OnTopProblem:
     def __init__(self, room: Room, items: list[Item], support: PlacedInstance,
                  surfaces: tuple[SupportSurface, ...], placed: tuple[PlacedInstance, ...],
                  sizes: dict[str, tuple[float, float, float]], cfg: LayoutConfig, rng: np.random.Generator,
-                 max_branch: int):
+                 max_branch: int, support_mesh: MeshData | None = None, map_key: tuple = ()):
         self.room, self.items, self.cfg, self.rng = room, items, cfg, rng
         self.n = len(items)
         self.max_branch = max_branch
@@ -55,6 +58,8 @@ class OnTopProblem:
         self.cap = cfg.max_on_top_per_support
         self.avoidable_after = np.zeros(self.n + 1, dtype=np.int64)  # avoidable items in k..n-1
         self._grids = [self._grid(p) for p in self.polys]
+        self.maps = [None if support_mesh is None else surface_map(map_key + (i,), support_mesh, surf, poly.bounds)
+                     for i, (surf, poly) in enumerate(zip(self.surfaces, self.polys))]
         self._forced: list[str | None] = [None] * self.n
         self._cache: dict[int, Candidates] = {}
         for k in range(self.n - 1, -1, -1):
@@ -78,7 +83,7 @@ class OnTopProblem:
         rot = max(self.cfg.rotations, 1)
         yaws = self.yaw_offset[k] + np.arange(rot) * (2 * np.pi / rot)
         c, s = np.cos(self.syaw), np.sin(self.syaw)
-        for surf, poly, pts in zip(self.surfaces, self.polys, self._grids):
+        for surf, poly, pts, smap in zip(self.surfaces, self.polys, self._grids, self.maps):
             if surf.clearance is not None and h > surf.clearance - 0.005:
                 continue
             z = self.sz + surf.height
@@ -88,6 +93,8 @@ class OnTopProblem:
             ly = np.tile(pts[:, 1], rot)
             lyaw = np.repeat(yaws, len(pts))
             inside = rects_in_polygon(rect_corners(lx, ly, lyaw, w, d), poly)
+            if smap is not None and inside.any():
+                inside[inside] = smap.footprint_ok(lx[inside], ly[inside], lyaw[inside], w, d, h)
             if not inside.any():
                 continue
             lx, ly, lyaw = lx[inside], ly[inside], lyaw[inside]
