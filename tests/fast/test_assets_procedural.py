@@ -50,7 +50,7 @@ def test_registry_has_enough_families_in_every_group():
 def test_family_builds_valid_canonical_mesh(name):
     fam = FAMILIES[name]
     for seed in SEEDS:
-        shape = build_family(name, np.random.default_rng(seed))
+        shape = build_family(name, rng=np.random.default_rng(seed))
         m = shape.mesh
         where = f"{name} seed {seed}"
         assert m.vertices.dtype == np.float32 and m.faces.dtype == np.int32 and m.face_colors.dtype == np.uint8
@@ -83,7 +83,7 @@ def test_supports_lie_on_the_mesh(name):
     """A ray dropped from just above a support polygon lands on it; nothing intrudes below its clearance."""
     seen = 0
     for seed in range(4):
-        shape = build_family(name, np.random.default_rng(seed))
+        shape = build_family(name, rng=np.random.default_rng(seed))
         if not shape.supports:
             continue
         tm = _trimesh(shape.mesh)
@@ -116,7 +116,7 @@ def test_supports_lie_on_the_mesh(name):
 @pytest.mark.parametrize("name", ["chair", "sofa", "armchair", "bed", "office_chair", "toilet"])
 def test_backs_are_at_plus_y(name):
     for seed in SEEDS:
-        v = build_family(name, np.random.default_rng(seed)).mesh.vertices
+        v = build_family(name, rng=np.random.default_rng(seed)).mesh.vertices
         top = v[v[:, 2] > np.percentile(v[:, 2], 85)]
         assert top[:, 1].mean() > 0, f"{name} seed {seed}: tallest part should be at the back (+y)"
 
@@ -124,7 +124,7 @@ def test_backs_are_at_plus_y(name):
 @pytest.mark.parametrize("name", ["tv_wall", "monitor", "tv_on_foot"])
 def test_screens_face_minus_y(name):
     for seed in SEEDS:
-        m = build_family(name, np.random.default_rng(seed)).mesh
+        m = build_family(name, rng=np.random.default_rng(seed)).mesh
         tm = _trimesh(m)
         z = (m.vertices[:, 2].min() + m.vertices[:, 2].max()) / 2
         hit = tm.ray.intersects_first(np.array([[0.0, -10.0, z]]), np.array([[0.0, 1.0, 0.0]]))[0]
@@ -136,7 +136,7 @@ def test_wall_items_have_a_flat_back_at_plus_y():
         if FAMILIES[name].groups[0] != "wall":
             continue
         for seed in SEEDS:
-            m = build_family(name, np.random.default_rng(seed)).mesh
+            m = build_family(name, rng=np.random.default_rng(seed)).mesh
             tm = _trimesh(m)
             back = np.abs(m.vertices[:, 1] - m.vertices[:, 1].max()) < 1e-4
             assert back.sum() >= 3, f"{name}: no flat back"
@@ -236,8 +236,26 @@ def test_build_library_is_idempotent_and_keeps_other_sources(tmp_path):
     assert "meshes:x/one" in smaller
 
 
+def test_smaller_rebuild_removes_orphan_meshes(tmp_path):
+    root = tmp_path / "lib"
+    build_library(root, count=20, seed=2)
+    assert len(list((root / "meshes").glob("*.npz"))) == 20
+    cat = build_library(root, count=8, seed=2)
+    files = sorted(p.name for p in (root / "meshes").glob("*.npz"))
+    assert files == sorted(Path(r.mesh_file).name for r in cat.records)
+    assert not list((root / "meshes").glob(".*.tmp"))  # no half-written leftovers
+
+
+def test_open_catalog_falls_back_to_the_procedural_library():
+    from assist3d.assets import open_catalog, procedural_library_dir
+
+    cat = open_catalog(procedural_count=15, procedural_seed=4)  # the cache folder is isolated by conftest
+    assert len(cat) == 15 and cat.root == procedural_library_dir(15, 4)
+    assert {r.source for r in cat.records} == {SOURCE}
+
+
 def test_bad_arguments_raise_clear_errors(tmp_path):
     with pytest.raises(AssetError, match="did you mean 'chair'"):
-        build_family("chiar", np.random.default_rng(0))
+        build_family("chiar", rng=np.random.default_rng(0))
     with pytest.raises(AssetError, match=">= 1"):
         build_library(tmp_path / "x", count=0, seed=0)

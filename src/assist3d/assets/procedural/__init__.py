@@ -11,7 +11,7 @@ Public API::
 
     build_library(root, *, count, seed, workers=1) -> Catalog
     build_asset(seed, index) -> (AssetRecord, MeshData)
-    build_family(name, rng) -> Shape
+    build_family(name, *, rng) -> Shape
     family_names() -> tuple[str, ...]
     family_of(seed, index) -> str
 """
@@ -81,7 +81,7 @@ def family_of(seed: int, index: int) -> str:
     return members[int(rng.choice(len(members), p=w / w.sum()))]
 
 
-def build_family(name: str, rng: np.random.Generator) -> Shape:
+def build_family(name: str, *, rng: np.random.Generator) -> Shape:
     """One asset of family ``name`` drawn from ``rng`` (canonical frame)."""
     try:
         fam = FAMILIES[name]
@@ -153,7 +153,12 @@ def build_library(root: str | Path, *, count: int, seed: int, workers: int = 1) 
     if _up_to_date(catalog, count, seed):
         log.info("procedural library in %s is up to date (%d assets, seed %d)", root, count, seed)
         return catalog
-    catalog.remove_source(SOURCE)
+    stale = {r.mesh_file for r in catalog.records if r.source == SOURCE}
+    if stale:
+        # forget the old procedural assets on disk first: a rebuild interrupted while it
+        # overwrites their meshes must not leave an index that lists them
+        catalog.remove_source(SOURCE)
+        catalog.save()
     # Building is cheap (a few ms per asset); writing is dominated by each file's fsync, which
     # releases the GIL, so a few writer threads overlap the waits. The index is sorted by id, so
     # the result does not depend on the order in which writes finish.
@@ -173,5 +178,8 @@ def build_library(root: str | Path, *, count: int, seed: int, workers: int = 1) 
                 for fut in pending:
                     fut.result()
     catalog.save()
+    kept = {r.mesh_file for r in catalog.records}
+    for rel in sorted(stale - kept):  # meshes of assets the smaller library no longer has
+        (catalog.root / rel).unlink(missing_ok=True)
     log.info("procedural library: %d assets (seed %d) in %s, %.1f s", count, seed, root, time.perf_counter() - t0)
     return catalog
