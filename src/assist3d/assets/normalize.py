@@ -290,6 +290,8 @@ def normalize_loaded(loaded: Any, *, rotation: np.ndarray | None = None, size: S
                      scale: float | None = None) -> Normalized:
     """Flatten, validate, rotate/scale into the canonical frame; raises :class:`MeshRejected`."""
     v, f, c = flatten_geometry(loaded)
+    if len(f) == 0 and len(getattr(loaded, "geometry", {}) or {}) > 0:
+        raise MeshRejected("no triangles: the file holds only lines or points")
     reason = validate_mesh(v, f)
     if reason:
         raise MeshRejected(reason)
