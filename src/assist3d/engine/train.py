@@ -131,6 +131,8 @@ class Trainer:
         self.source = source
         self.device = device
         self.dist = dist_info or DistInfo(0, 1, 0)
+        if cfg.threads > 0:
+            torch.set_num_threads(cfg.threads)
         torch.manual_seed(cfg.seed)
         model = build_model(cfg.model).to(device)
         if self.dist.world_size > 1:
@@ -138,9 +140,11 @@ class Trainer:
             model = torch.nn.parallel.DistributedDataParallel(model, device_ids=ids)
         self.model = model
         self.optimizer = torch.optim.AdamW(model.parameters(), lr=cfg.optim.lr, weight_decay=cfg.optim.weight_decay)
-        self.scheduler = torch.optim.lr_scheduler.OneCycleLR(self.optimizer, max_lr=cfg.optim.lr,
-                                                             total_steps=max(steps_total, 1),
-                                                             pct_start=cfg.optim.pct_start)
+        # OneCycleLR needs a warm-up and an annealing phase of at least one step each
+        total = max(steps_total, 4)
+        pct = min(max(cfg.optim.pct_start, 1.5 / total), 1 - 1.5 / total)
+        self.scheduler = torch.optim.lr_scheduler.OneCycleLR(self.optimizer, max_lr=cfg.optim.lr, total_steps=total,
+                                                             pct_start=pct)
         self.use_amp = cfg.optim.amp and device.startswith("cuda")
         self.amp_dtype = torch.bfloat16 if self.use_amp and torch.cuda.is_bf16_supported() else torch.float16
         self.scaler = torch.amp.GradScaler("cuda") if self.use_amp and self.amp_dtype == torch.float16 else None
@@ -224,8 +228,6 @@ def train(cfg: TrainConfig, out_dir: str | Path, *, resume: bool = False, source
     info = init_distributed(device)
     if device == "cuda" and info.world_size > 1:
         device = f"cuda:{info.local_rank}"
-    if cfg.threads > 0:
-        torch.set_num_threads(cfg.threads)
     src: Source = source if source is not None else _SpecSource(cfg.data.train)
     sampler = DistributedSampler(range(len(src)), num_replicas=info.world_size, rank=info.rank, shuffle=True,
                                  seed=cfg.seed)

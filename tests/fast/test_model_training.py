@@ -1,0 +1,180 @@
+"""Matcher, losses, one training step, checkpoint round trip, predict output, DBSCAN, voxelisation."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from assist3d.engine.config import LossConfig, parse_data_arg, parse_train_config  # noqa: E402
+from assist3d.engine.losses import layer_loss, scene_loss  # noqa: E402
+from assist3d.engine.matcher import hungarian_match, match_cost  # noqa: E402
+from assist3d.engine.predict import dbscan_labels, predict_scene  # noqa: E402
+from assist3d.engine.toy import make_toy_scene  # noqa: E402
+from assist3d.engine.train import MemorySource, Trainer, load_checkpoint, save_checkpoint, train  # noqa: E402
+from assist3d.engine.voxelize import majority_label, voxelize  # noqa: E402
+from assist3d.models.decoder import LayerPrediction  # noqa: E402
+
+TINY = {
+    "threads": 1,
+    "model": {"stem_channels": 8, "stem_kernel": 3, "enc_channels": [8, 16, 16, 24], "enc_blocks": [1, 1, 1, 1],
+              "dec_channels": [24, 16, 16, 16], "dec_blocks": [1, 1, 1, 1], "hidden": 32, "heads": 4, "ffn": 64,
+              "num_passes": 1, "num_queries": 12, "num_queries_eval": 12},
+    "data": {"voxel_size": 0.1},
+    "augment": {"enabled": False},
+    "optim": {"lr": 0.003, "batch_size": 2, "epochs": 2, "pct_start": 0.5},
+    "predict": {"top_k": 12},
+}
+
+
+def _scenes(n: int = 2) -> list:
+    return [make_toy_scene(f"s{i}", rng=np.random.default_rng(i), num_objects=3, room_m=3.0, density_per_m2=150)
+            for i in range(n)]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_matcher_is_optimal_against_brute_force(seed):
+    gen = torch.Generator().manual_seed(seed)
+    q, g, n = 5, 3 + seed % 3, 40
+    obj = torch.randn(q, generator=gen)
+    masks = torch.randn(n, q, generator=gen) * 3
+    targets = (torch.rand(n, g, generator=gen) > 0.6).float()
+    rows, cols = hungarian_match(obj, masks, targets)
+    cost = match_cost(obj, masks, targets).numpy()
+    got = cost[rows, cols].sum()
+    best = min(sum(cost[p[j], j] for j in range(g)) for p in itertools.permutations(range(q), g))
+    assert len(rows) == g and len(set(rows.tolist())) == g
+    assert got == pytest.approx(best, abs=1e-5)
+
+
+def test_matcher_recovers_a_permutation():
+    targets = torch.zeros(30, 3)
+    targets[:10, 0] = targets[10:20, 1] = targets[20:, 2] = 1
+    perm = [2, 0, 1]
+    masks = torch.full((30, 4), -20.0)
+    for qi, ti in enumerate(perm):
+        masks[:, qi] = torch.where(targets[:, ti] > 0, 20.0, -20.0)
+    rows, cols = hungarian_match(torch.tensor([5.0, 5.0, 5.0, -5.0]), masks, targets)
+    assert dict(zip(cols.tolist(), rows.tolist())) == {2: 0, 0: 1, 1: 2}
+
+
+def test_losses_vanish_on_perfect_predictions():
+    targets = torch.zeros(50, 2)
+    targets[:20, 0] = 1
+    targets[30:, 1] = 1
+    masks = torch.full((50, 4), -60.0)
+    masks[:, 1] = torch.where(targets[:, 0] > 0, 60.0, -60.0)
+    masks[:, 3] = torch.where(targets[:, 1] > 0, 60.0, -60.0)
+    obj = torch.tensor([-60.0, 60.0, -60.0, 60.0])
+    parts = layer_loss(LayerPrediction(obj, masks), targets, LossConfig())
+    assert float(parts.total) < 1e-6
+    # a wrong objectness on one query makes it positive
+    bad = layer_loss(LayerPrediction(torch.tensor([60.0, 60.0, -60.0, 60.0]), masks), targets, LossConfig())
+    assert float(bad.objectness) > 1.0
+    # auxiliary layers add their own matched losses
+    imperfect = LayerPrediction(obj, torch.zeros_like(masks))
+    both = scene_loss([imperfect, LayerPrediction(obj, masks)], targets, LossConfig())
+    only = scene_loss([imperfect, LayerPrediction(obj, masks)], targets, LossConfig(aux=False))
+    assert float(only.total) < 1e-6 < float(both.total)
+
+
+def test_voxelize_majority_and_inverse():
+    coord = np.array([[0.01, 0.01, 0.01], [0.02, 0.03, 0.01], [0.04, 0.01, 0.02], [0.5, 0.5, 0.5]], np.float32)
+    color = np.array([[255, 0, 0], [0, 0, 255], [0, 0, 255], [10, 10, 10]], np.uint8)
+    inst = np.array([3, 7, 7, -1], np.int32)
+    vox = voxelize(coord, color, inst, 0.05)
+    assert len(vox.coords) == 2
+    assert vox.inverse[0] == vox.inverse[1] == vox.inverse[2] != vox.inverse[3]
+    assert vox.instance[vox.inverse[0]] == 7 and vox.instance[vox.inverse[3]] == -1
+    assert (majority_label(np.array([0, 0, 1, 1]), np.array([5, 2, 4, 4]), 3) == [2, 4, -1]).all()
+
+
+def test_one_training_step_lowers_the_loss():
+    cfg = parse_train_config(TINY)
+    trainer = Trainer(cfg, MemorySource(_scenes()), steps_total=50)
+    before, _ = trainer.batch_loss([0, 1], rng=np.random.default_rng(0), augment=False)
+    trainer.model.train()
+    for _ in range(3):
+        trainer.step([0, 1], rng=np.random.default_rng(0))
+    torch.manual_seed(0)
+    after, _ = trainer.batch_loss([0, 1], rng=np.random.default_rng(0), augment=False)
+    assert float(after.detach()) < float(before.detach())
+
+
+def test_synthetic_scenes_are_weighted_by_alpha():
+    cfg = parse_train_config({**TINY, "data": {"voxel_size": 0.1, "synthetic_alpha": 0.25}})
+    scenes = _scenes(1)
+    losses = []
+    for synthetic in (False, True):
+        trainer = Trainer(cfg, MemorySource(scenes, [synthetic]), steps_total=5)
+        trainer.model.eval()
+        torch.manual_seed(0)
+        loss, _ = trainer.batch_loss([0], rng=np.random.default_rng(0), augment=False)
+        losses.append(float(loss))
+    assert losses[1] == pytest.approx(0.25 * losses[0], rel=1e-5)
+
+
+def test_data_arg_kinds():
+    assert parse_data_arg("assist3d:/x").resolved_kind() == "synthetic"
+    assert parse_data_arg("scannet:/x").resolved_kind() == "real"
+    assert parse_data_arg("real=assist3d:/x").resolved_kind() == "real"
+    assert parse_data_arg("synthetic=pointcept:/x").resolved_kind() == "synthetic"
+
+
+def test_train_checkpoint_resume_round_trip(tmp_path):
+    cfg = parse_train_config({**TINY, "optim": {**TINY["optim"], "epochs": 2}})
+    src = MemorySource(_scenes())
+    res = train(cfg, tmp_path, source=src)
+    state = load_checkpoint(tmp_path / "last.pt")
+    assert state["epoch"] == 2 and state["step"] == res.steps == 2
+    assert (tmp_path / "epoch_0002.pt").is_file() and (tmp_path / "config.yaml").is_file()
+    rows = (tmp_path / "metrics.csv").read_text().strip().splitlines()
+    assert rows[0].startswith("epoch,step") and len(rows) == 3
+    # resuming a finished run keeps its state; extending the schedule continues from the saved step
+    cfg3 = parse_train_config({**TINY, "optim": {**TINY["optim"], "epochs": 3}})
+    trainer = Trainer(cfg3, src, steps_total=3)
+    trainer.restore(state)
+    for k, v in state["model"].items():
+        torch.testing.assert_close(trainer.state()["model"][k], v)
+    assert trainer.scheduler.state_dict()["last_epoch"] == state["scheduler"]["last_epoch"]
+    save_checkpoint(tmp_path / "copy.pt", trainer.model, trainer.optimizer, trainer.scheduler, 2, 2, cfg)
+    again = load_checkpoint(tmp_path / "copy.pt")
+    for k, v in state["model"].items():
+        torch.testing.assert_close(again["model"][k], v)
+
+
+def test_resume_continues_training(tmp_path):
+    cfg1 = parse_train_config({**TINY, "optim": {**TINY["optim"], "epochs": 1}})
+    src = MemorySource(_scenes())
+    train(cfg1, tmp_path, source=src)
+    cfg2 = parse_train_config({**TINY, "optim": {**TINY["optim"], "epochs": 2}})
+    res = train(cfg2, tmp_path, resume=True, source=src)
+    assert res.steps == 2 and load_checkpoint(tmp_path / "last.pt")["epoch"] == 2
+    assert len((tmp_path / "metrics.csv").read_text().strip().splitlines()) == 3
+
+
+def test_predict_scene_shapes_and_scores():
+    cfg = parse_train_config(TINY)
+    trainer = Trainer(cfg, MemorySource(_scenes(1)), steps_total=5)
+    sample = _scenes(1)[0]
+    pred = predict_scene(trainer.model, sample, cfg.data.voxel_size, cfg.predict)
+    m = len(pred.scores)
+    assert pred.masks.dtype == np.bool_ and pred.masks.shape == (m, len(sample))
+    assert pred.scores.dtype == np.float32 and 0 < m <= cfg.predict.top_k
+    assert (np.diff(pred.scores) <= 0).all() and ((pred.scores >= 0) & (pred.scores <= 1)).all()
+    assert pred.masks.any(1).all()
+    # the same voxel -> the same answer for every point in it
+    vox = voxelize(sample.coord, sample.color, None, cfg.data.voxel_size)
+    first = np.unique(vox.inverse, return_index=True)[1]
+    assert (pred.masks == pred.masks[:, first][:, vox.inverse]).all()
+
+
+def test_dbscan_splits_far_clusters():
+    rng = np.random.default_rng(0)
+    a = rng.normal(0, 0.05, (30, 3))
+    b = rng.normal(5, 0.05, (20, 3))
+    lab = dbscan_labels(np.concatenate([a, b, [[20, 20, 20]]]), eps=0.5, min_points=3)
+    assert len(set(lab[:30])) == 1 and len(set(lab[30:50])) == 1 and lab[0] != lab[30] and lab[-1] == -1
