@@ -92,6 +92,10 @@ class LayoutConfig(_Section):
     group_budget_s: float = Field(1.0, gt=0, description="Time budget of the depth-first search per group, s.")
     max_backtracks: int = Field(2000, ge=0, description="Backtracking steps per group before giving up.")
     max_on_top_per_support: int = Field(5, ge=0, description="On-top objects placed per support at most.")
+    max_branch: int = Field(3, ge=1, description="Positions tried per object when the search backtracks: the best "
+                                                 "one, then spread-out alternatives (paper: every valid cell; n/a).")
+    patience: int = Field(60, ge=0, description="Backtracking steps without a layout holding more objects before a "
+                                                "group's search settles for its best (paper: n/a).")
 
 
 class RenderConfig(_Section):

@@ -31,12 +31,6 @@ log = logging.getLogger(__name__)
 
 __all__ = ["PlacementResult", "place_group", "place_group_random", "instance_group"]
 
-# Search shape: alternatives tried per object when backtracking, and alternatives tried in a row
-# without finding a layout with more objects before the search settles for the best one.
-MAX_BRANCH = 3
-PATIENCE = 60
-
-
 @dataclass(frozen=True)
 class PlacementResult:
     """What one group's placement produced.
@@ -106,9 +100,9 @@ def place_group(request: PlanRequest, plan: GroupPlan, catalog: Catalog, *, cfg:
     sizes = _sizes(catalog, request)
     problem: FloorProblem | WallProblem | OnTopProblem
     if kind == "floor":
-        problem = FloorProblem(request.room, items, cfg, rng, MAX_BRANCH)
+        problem = FloorProblem(request.room, items, cfg, rng, cfg.max_branch)
     elif kind == "wall":
-        problem = WallProblem(request.room, items, request.placed, sizes, cfg, rng, MAX_BRANCH)
+        problem = WallProblem(request.room, items, request.placed, sizes, cfg, rng, cfg.max_branch)
     else:
         support = _support(request)
         if support is None:
@@ -119,8 +113,8 @@ def place_group(request: PlanRequest, plan: GroupPlan, catalog: Catalog, *, cfg:
         sizes.setdefault(support.asset, sup_rec.size)
         mesh = catalog.load_mesh(sup_rec) if sup_rec.supports else None
         problem = OnTopProblem(request.room, items, support, sup_rec.supports, request.placed, sizes, cfg, rng,
-                               MAX_BRANCH, mesh, (str(catalog.root), sup_rec.id, sup_rec.mesh_file))
-    result = depth_first(problem, max_backtracks=cfg.max_backtracks, patience=PATIENCE, budget_s=cfg.group_budget_s)
+                               cfg.max_branch, mesh, (str(catalog.root), sup_rec.id, sup_rec.mesh_file))
+    result = depth_first(problem, max_backtracks=cfg.max_backtracks, patience=cfg.patience, budget_s=cfg.group_budget_s)
     parent = _support(request).id if kind == "on" else None  # type: ignore[union-attr]
     item_ids: dict[int, int] = {}
     for k, ch in enumerate(result.choices):
