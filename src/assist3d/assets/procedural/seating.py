@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._build import MeshBuilder, Shape, disc_support, fabric, material, metal, plastic, rect_support, wood
+from ._build import MeshBuilder, Shape, disc_support, fabric, material, metal, plastic, rect_support, rot_x, wood
 from ._parts import choice, cushion, four_legs, star_base, u
 from ._registry import family
 
@@ -37,17 +37,49 @@ def _chair_back(b: MeshBuilder, rng: np.random.Generator, w: float, y_back: floa
 
 @family("chair", ("floor",), weight=2.0)
 def chair(rng: np.random.Generator) -> Shape:
+    """Dining / side chairs: classic (slats, ladder or panel back, optional stretchers and arms),
+    upholstered, or a moulded shell on metal legs."""
     b = MeshBuilder()
     w, d, sh = u(rng, 0.4, 0.52), u(rng, 0.4, 0.52), u(rng, 0.42, 0.48)
-    st = u(rng, 0.02, 0.06)
-    frame, seat = material(rng), (fabric(rng) if rng.random() < 0.4 else wood(rng))
-    b.slab(-w / 2, w / 2, -d / 2, d / 2, sh - st, sh, seat)
+    style = choice(rng, ("classic", "classic", "upholstered", "shell"))
+    frame = material(rng)
     lt = u(rng, 0.025, 0.045)
-    four_legs(b, rng, w / 2 - lt / 2 - 0.005, d / 2 - lt / 2 - 0.005, sh - st, frame, thick=lt,
-              style=choice(rng, ("square", "round", "tapered")))
-    bt = _chair_back(b, rng, w, d / 2 + 0.02, sh - st, sh + u(rng, 0.35, 0.55), frame)
-    sup = rect_support(-w / 2, w / 2, -d / 2, d / 2 + 0.02 - bt, sh, inset=0.03)
-    return b.finish("chair", supports=[sup])
+    half_x, half_y = w / 2 - lt / 2 - 0.005, d / 2 - lt / 2 - 0.005
+    if style == "shell":
+        shell, legs = plastic(rng), metal(rng)
+        st = 0.015
+        b.slab(-w / 2, w / 2, -d / 2, d / 2, sh - st, sh, shell)
+        four_legs(b, rng, half_x - 0.02, half_y - 0.02, sh - st, legs, thick=0.022, style=choice(rng, ("round", "splayed")))
+        tilt = u(rng, 0.08, 0.25)
+        bh = u(rng, 0.3, 0.45)
+        b.box((w, 0.015, bh), (0, d / 2 - 0.0075 + np.sin(tilt) * bh / 2, sh - 0.01 + np.cos(tilt) * bh / 2), shell,
+              rot=rot_x(-tilt))
+        return b.finish("chair", supports=[rect_support(-w / 2, w / 2, -d / 2, d / 2 - 0.03, sh, inset=0.03)])
+    st = u(rng, 0.02, 0.06)
+    seat = fabric(rng) if style == "upholstered" or rng.random() < 0.4 else wood(rng)
+    b.slab(-w / 2, w / 2, -d / 2, d / 2, sh - st, sh, seat)
+    four_legs(b, rng, half_x, half_y, sh - st, frame, thick=lt, style=choice(rng, ("square", "round", "tapered")))
+    if rng.random() < 0.4:  # H stretcher between the legs
+        z = u(rng, 0.1, 0.2)
+        for sx in (-1, 1):
+            b.slab(sx * half_x - 0.01, sx * half_x + 0.01, -half_y, half_y, z, z + 0.02, frame)
+        b.slab(-half_x, half_x, -0.01, 0.01, z, z + 0.02, frame)
+    top = sh + u(rng, 0.35, 0.55)
+    if style == "upholstered":
+        bt = u(rng, 0.05, 0.08)
+        b.slab(-w / 2, w / 2, d / 2 + 0.02 - bt, d / 2 + 0.02, sh - st, top, seat)
+    else:
+        bt = _chair_back(b, rng, w, d / 2 + 0.02, sh - st, top, frame)
+    x_free = w / 2
+    if style == "classic" and rng.random() < 0.3:  # arms on posts above the front legs
+        ah = sh + u(rng, 0.18, 0.24)
+        for sx in (-1, 1):
+            x = sx * half_x
+            b.slab(x - 0.012, x + 0.012, -half_y - 0.012, -half_y + 0.012, sh, ah, frame)
+            b.slab(x - 0.025, x + 0.025, -half_y - 0.03, d / 2 + 0.02 - bt, ah, ah + 0.025, frame)
+        x_free = half_x - 0.025
+    sup = rect_support(-x_free, x_free, -d / 2, d / 2 + 0.02 - bt, sh, inset=0.03)
+    return b.finish("chair", supports=[sup], extra={"style": style})
 
 
 @family("office_chair", ("floor",), weight=1.2)
@@ -94,30 +126,47 @@ def armchair(rng: np.random.Generator) -> Shape:
 
 @family("sofa", ("floor",), weight=1.5)
 def sofa(rng: np.random.Generator) -> Shape:
+    """Two- to four-seat sofas: box, rolled or no arms, optional chaise at one end (front, -y)."""
     b = MeshBuilder()
     cover, leg = fabric(rng), (wood(rng) if rng.random() < 0.5 else metal(rng))
     seats = int(rng.integers(2, 5))
     sw = u(rng, 0.55, 0.7)
-    arm_w = u(rng, 0.1, 0.25)
+    arms = choice(rng, ("box", "box", "rolled", "none"))
+    arm_w = 0.0 if arms == "none" else u(rng, 0.1, 0.25)
     w = seats * sw + 2 * arm_w
     d = u(rng, 0.8, 1.0)
     lh = u(rng, 0.04, 0.14)
     sh = u(rng, 0.4, 0.47)
     back_t = u(rng, 0.15, 0.25)
     ah, bh = sh + u(rng, 0.1, 0.25), sh + u(rng, 0.35, 0.5)
+    chaise = u(rng, 0.5, 0.75) if seats >= 3 and rng.random() < 0.3 else 0.0
+    side = choice(rng, (-1, 1))
     four_legs(b, rng, w / 2 - 0.06, d / 2 - 0.06, lh, leg, thick=0.04, style=choice(rng, ("square", "tapered")))
     b.slab(-w / 2, w / 2, -d / 2, d / 2, lh, sh - 0.12, cover)
+    round_back = rng.random() < 0.5
     for k in range(seats):
         x0 = -w / 2 + arm_w + k * sw
         cushion(b, x0, x0 + sw, -d / 2 + 0.01, d / 2 - back_t, sh - 0.12, sh, cover)
         cushion(b, x0 + 0.004, x0 + sw - 0.004, d / 2 - back_t - 0.1, d / 2 - back_t + 0.02, sh, bh - 0.05,
-                cover, round_top=False)
-    for sx in (-1, 1):
-        x0 = sx * w / 2 - (arm_w if sx > 0 else 0)
-        b.slab(x0, x0 + arm_w, -d / 2, d / 2, lh, ah, cover)
+                cover, round_top=round_back)
+    sups = [rect_support(-w / 2 + arm_w, w / 2 - arm_w, -d / 2 + 0.01, d / 2 - back_t - 0.1, sh, inset=0.04)]
+    if chaise:  # the end seat continues forward
+        x0, x1 = (w / 2 - arm_w - sw, w / 2 - arm_w) if side > 0 else (-w / 2 + arm_w, -w / 2 + arm_w + sw)
+        b.slab(x0 - arm_w if side < 0 else x0, x1 + arm_w if side > 0 else x1, -d / 2 - chaise, -d / 2, lh,
+               sh - 0.12, cover)
+        cushion(b, x0, x1, -d / 2 - chaise, -d / 2 + 0.01, sh - 0.12, sh, cover)
+        b.slab((x0 + x1) / 2 - 0.02, (x0 + x1) / 2 + 0.02, -d / 2 - chaise + 0.04, -d / 2 - chaise + 0.08, 0, lh, leg)
+        sups.append(rect_support(x0, x1, -d / 2 - chaise, -d / 2 + 0.01, sh, inset=0.04))
+    if arms != "none":
+        for sx in (-1, 1):
+            x0 = sx * w / 2 - (arm_w if sx > 0 else 0)
+            y0 = -d / 2 - (chaise if chaise and sx == side else 0.0)
+            b.slab(x0, x0 + arm_w, y0, d / 2, lh, ah, cover)
+            if arms == "rolled":
+                b.cylinder(arm_w / 2 * 1.15, d / 2 - y0, (x0 + arm_w / 2, y0, ah - arm_w * 0.3), cover, sections=12,
+                           rot=rot_x(-np.pi / 2))
     b.slab(-w / 2, w / 2, d / 2 - back_t, d / 2, lh, bh, cover)
-    sup = rect_support(-w / 2 + arm_w, w / 2 - arm_w, -d / 2 + 0.01, d / 2 - back_t - 0.1, sh, inset=0.04)
-    return b.finish("sofa", supports=[sup], extra={"seats": seats})
+    return b.finish("sofa", supports=sups, extra={"seats": seats, "arms": arms, "chaise": chaise > 0})
 
 
 @family("stool", ("floor",))
