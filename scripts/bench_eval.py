@@ -58,7 +58,13 @@ def main() -> None:
     ap.add_argument("--scenes", type=int, default=312)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--io", type=int, default=0, help="also time npz write+read on this many scenes")
+    ap.add_argument("--end-to-end", type=Path, default=None, metavar="DIR",
+                    help="write the scenes (array format) and predictions (npz) under DIR, then time "
+                         "evaluate_dataset on them with 1 and 2 workers (DIR is removed afterwards)")
     args = ap.parse_args()
+    if args.end_to_end is not None:
+        end_to_end(args)
+        return
     rng = np.random.default_rng(args.seed)
     t_gen = t_eval = 0.0
     matches = []
@@ -95,6 +101,35 @@ def main() -> None:
     for f in tmp.glob("*.npz"):
         f.unlink()
     tmp.rmdir()
+
+
+def end_to_end(args: argparse.Namespace) -> None:
+    import shutil
+
+    from assist3d.data import open_dataset
+    from assist3d.evaluation import evaluate_dataset
+
+    rng = np.random.default_rng(args.seed)
+    gt, pred = args.end_to_end / "gt", args.end_to_end / "pred"
+    gt.mkdir(parents=True, exist_ok=False)
+    for i in range(args.scenes):
+        inst, masks, scores = synthetic_scene(rng)
+        a = np.zeros((len(inst), 8), np.float32)
+        a[:, :3] = rng.random((len(inst), 3), dtype=np.float32) * 5
+        a[:, 6] = np.where(inst >= 0, 5, 1)  # objects: chair, the rest: wall
+        a[:, 7] = np.where(inst >= 0, inst + 1, 0)
+        np.save(gt / f"scene{i:04d}_00.npy", a)
+        save_predictions(pred / f"scene{i:04d}_00.npz", masks, scores)
+    try:
+        ds = open_dataset(f"array:{gt}")
+        for workers in (1, 2):
+            t0 = time.perf_counter()
+            r = evaluate_dataset(ds, pred, workers=workers)
+            dt = time.perf_counter() - t0
+            print(f"evaluate_dataset, {len(ds)} scenes, workers {workers}: {dt:.1f} s "
+                  f"(AP {r.overall['AP']:.3f}, AP50 {r.overall['AP50']:.3f})")
+    finally:
+        shutil.rmtree(args.end_to_end)
 
 
 if __name__ == "__main__":
