@@ -85,7 +85,7 @@ def plate(rng: np.random.Generator) -> Shape:
     for k in range(n):
         b.lathe([(r * 0.6, k * 0.018), (r, k * 0.018 + 0.015), (r - 0.01, k * 0.018 + 0.018), (r * 0.6, k * 0.018 + 0.006),
                  (0, k * 0.018 + 0.006)], c, sections=24)
-    return b.finish("plate" if n == 1 else "plates")
+    return b.finish("plate", extra={"stacked": n})
 
 
 @family("vase", ("obj",), weight=1.2)
