@@ -86,6 +86,7 @@ def main(argv: list[str] | None = None) -> int:
         "mean_placed_per_group": {g: round(v / n, 2) for g, v in sorted(per_group.items())},
         "mean_dropped": round(statistics.fmean(dropped), 2),
         "top_drop_reasons": dict(reasons.most_common(6)),
+        "groups_over_time_budget": budget_hits,
         "check_problems_total": sum(problems) if check is not None else None,
         "scenes_with_problems": sum(1 for p in problems if p) if check is not None else None,
         "median_seconds": round(statistics.median(seconds), 3),

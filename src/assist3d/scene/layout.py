@@ -195,8 +195,8 @@ class _Run:
         self.dropped.extend(result.dropped)
         self.notes.extend(str(n) for n in (result.stats or {}).get("notes", ()) or ())
         for k, v in (result.stats or {}).items():
-            if isinstance(v, (int, float)) and not isinstance(v, bool) and "second" not in k and "time" not in k:
-                self.place_stats[k] += v
+            if isinstance(v, (int, float)) and "second" not in k and "time" not in k:
+                self.place_stats[k] += int(v) if isinstance(v, bool) else v  # flags summed: groups that hit it
         self.timing[group] = round(time.perf_counter() - t0, 4)
         # map placed instances back to the selected objects (the same asset may be selected twice)
         queue: dict[str, deque[int]] = defaultdict(deque)
