@@ -183,11 +183,13 @@ def test_reimport_is_idempotent_and_interrupted_import_keeps_complete_entries(tm
     cat = Catalog.open_or_create(lib)
     import_sh3d(cat, [crafted_sh3f], workers=1)
     first = json.loads((lib / "index.json").read_text())
+    mesh_bytes = {p.name: p.read_bytes() for p in (lib / "meshes").glob("*.npz")}
     cat2 = Catalog.open(lib)
     import_sh3d(cat2, [crafted_sh3f], workers=1)
     second = json.loads((lib / "index.json").read_text())
-    assert [a["id"] for a in first["assets"]] == [a["id"] for a in second["assets"]]
+    assert first["assets"] == second["assets"]  # same records, nothing duplicated
     assert len(first["skipped"]) == len(second["skipped"])
+    assert {p.name: p.read_bytes() for p in (lib / "meshes").glob("*.npz")} == mesh_bytes  # byte-identical
 
     # kill the import after the second model: the saved index lists only loadable meshes
     lib2 = tmp_path / "lib2"

@@ -22,7 +22,6 @@ log = logging.getLogger(__name__)
 
 Item = TypeVar("Item")
 Progress = Callable[[int, int, str], None]
-Result = "tuple[AssetRecord, MeshData] | SkippedAsset"
 
 
 @dataclass(frozen=True)
@@ -49,7 +48,8 @@ def worker_count(workers: int | None, jobs: int) -> int:
     return max(1, min(int(workers), jobs))
 
 
-def run_import(catalog: Catalog, items: Sequence[Item], convert: Callable[[Item], object], *, source: str,
+def run_import(catalog: Catalog, items: Sequence[Item],
+               convert: Callable[[Item], tuple[AssetRecord, MeshData] | SkippedAsset], *, source: str,
                part_of: Callable[[Item], str], label_of: Callable[[Item], str], parts: Sequence[str],
                skipped: Sequence[SkippedAsset] = (), workers: int | None = None, save_every: int = 50,
                progress: Progress | None = None, started: float | None = None) -> ImportReport:
@@ -65,7 +65,7 @@ def run_import(catalog: Catalog, items: Sequence[Item], convert: Callable[[Item]
     total = len(items)
     done = 0
 
-    def handle(item: Item, result: object) -> None:
+    def handle(item: Item, result: tuple[AssetRecord, MeshData] | SkippedAsset) -> None:
         nonlocal done
         done += 1
         part = part_of(item)
@@ -74,7 +74,7 @@ def run_import(catalog: Catalog, items: Sequence[Item], convert: Callable[[Item]
             catalog.add_skipped(result, source, f"{source}:{part}/")
             log.info("%s: skipped %s: %s", source, result.path, result.reason)
         else:
-            record, mesh = result  # type: ignore[misc]
+            record, mesh = result
             catalog.add(record, mesh)
             added[part] = added.get(part, 0) + 1
         if save_every > 0 and done % save_every == 0:
