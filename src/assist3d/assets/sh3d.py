@@ -212,6 +212,11 @@ def _zip_resolver(zf: zipfile.ZipFile, names: dict[str, str], folder: str, extra
                 return extra[name]
             rel = posixpath.normpath(posixpath.join(self.folder, name.replace("\\", "/"))).lstrip("/")
             real = names.get(rel.lower()) or names.get(posixpath.basename(rel).lower())
+            if real is None and rel.lower().endswith(".mtl"):
+                # a renamed material file: use the folder's only .mtl, if there is exactly one
+                folder = posixpath.dirname(rel).lower()
+                mtls = [n for k, n in names.items() if k.endswith(".mtl") and posixpath.dirname(k) == folder]
+                real = mtls[0] if len(mtls) == 1 else None
             if real is None:
                 raise KeyError(f"{name!r} not in archive")
             return zf.read(real)
