@@ -115,6 +115,11 @@ _PAINT = ((235, 235, 230), (245, 240, 225), (200, 205, 210), (60, 65, 70), (180,
 _LEAF = ((60, 120, 50), (40, 95, 45), (90, 140, 60), (50, 110, 80), (110, 150, 70))
 
 
+def as_rgb(color: Sequence[float]) -> Color:
+    """A colour as a tuple of three ints (e.g. from a numpy expression)."""
+    return (int(color[0]), int(color[1]), int(color[2]))
+
+
 def _pick(palette: Sequence[Color], rng: np.random.Generator, amount: float) -> Color:
     return jitter(palette[int(rng.integers(len(palette)))], rng, amount)
 
@@ -328,7 +333,8 @@ class MeshBuilder:
         if p[-1, 0] != 0.0:
             p = np.vstack([p, [0.0, p[-1, 1]]])
         # signed area of the closed (r, z) polygon: positive = counter-clockwise = outward normals
-        area = 0.5 * float(np.sum(p[:-1, 0] * p[1:, 1] - p[1:, 0] * p[:-1, 1]) + p[-1, 0] * p[0, 1] - p[0, 0] * p[-1, 1])
+        area = 0.5 * float(np.sum(p[:-1, 0] * p[1:, 1] - p[1:, 0] * p[:-1, 1]) + p[-1, 0] * p[0, 1] - p[0,
+                0] * p[-1, 1])
         if area < 0:
             p = p[::-1]
         m = creation.revolve(p, sections=sections)

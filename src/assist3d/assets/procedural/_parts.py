@@ -1,10 +1,10 @@
-"""Furniture parts shared by several families: legs, drawers, doors, handles, cushions."""
+"""Parts shared by several families: legs, drawers, doors, handles, cushions, pots and foliage."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ._build import Color, MeshBuilder, metal, rot_z
+from ._build import Color, MeshBuilder, leaf, metal
 
 
 def u(rng: np.random.Generator, lo: float, hi: float) -> float:
@@ -36,7 +36,8 @@ def four_legs(b: MeshBuilder, rng: np.random.Generator, half_x: float, half_y: f
                 b.cylinder(t * 0.3, top, (x, y, 0.0), color, sections=10, top_radius=t / 2)
             else:
                 lean = min(0.04, 0.4 * t)
-                b.bar((x + sx * lean, y + sy * lean, 0.0), (x - sx * lean * 0.2, y - sy * lean * 0.2, top), t / 2, color)
+                b.bar((x + sx * lean, y + sy * lean, 0.0), (x - sx * lean * 0.2, y - sy * lean * 0.2, top),
+                        t / 2, color)
     return style
 
 
@@ -113,6 +114,33 @@ def star_base(b: MeshBuilder, rng: np.random.Generator, radius: float, color: Co
     return hub_h + 0.04
 
 
-def rotated_slab(b: MeshBuilder, size: tuple[float, float, float], center: tuple[float, float, float], angle_z: float,
-                 color: Color) -> None:
-    b.box(size, center, color, rot=rot_z(angle_z))
+def flower_pot(b: MeshBuilder, rng: np.random.Generator, r: float, h: float, color) -> None:
+    """A flower pot with a rim and soil, base at z = 0."""
+    top = r
+    bottom = r * u(rng, 0.65, 0.9)
+    b.lathe([(bottom, 0), (top, h), (top + 0.012, h), (top + 0.012, h + 0.02), (top - 0.01, h + 0.02),
+             (top - 0.01, h - 0.02), (0, h - 0.02)], color, sections=20)
+
+
+def foliage(b: MeshBuilder, rng: np.random.Generator, r: float, z0: float, height: float) -> None:
+    kind = choice(rng, ("bush", "tree", "palm", "cactus"))
+    green = leaf(rng)
+    if kind == "bush":
+        for _ in range(int(rng.integers(3, 7))):
+            c = (rng.uniform(-r, r) * 0.6, rng.uniform(-r, r) * 0.6, z0 + rng.uniform(0.3, 0.75) * height)
+            rr = u(rng, 0.45, 0.8) * max(r, height * 0.3)
+            b.ellipsoid((rr, rr * u(rng, 0.8, 1.2), min(rr, height * 0.3)), c, green)
+    elif kind == "tree":
+        b.cylinder(max(0.01, r * 0.08), height * 0.55, (0, 0, z0 - 0.02), (90, 65, 40), sections=8)
+        rr = max(r * 1.3, height * 0.25)
+        b.ellipsoid((rr, rr, height * 0.3), (0, 0, z0 + height * 0.7), green, subdivisions=2)
+    elif kind == "palm":
+        n = int(rng.integers(5, 9))
+        for k in range(n):
+            a = 2 * np.pi * k / n + rng.uniform(-0.2, 0.2)
+            tip = (np.cos(a) * r * 1.6, np.sin(a) * r * 1.6, z0 + height * u(rng, 0.6, 1.0))
+            b.beam((0, 0, z0), tip, max(0.02, r * 0.3), 0.01, green)
+    else:
+        b.capsule(r * 0.55, height * 0.9, (0, 0, z0 + height * 0.45), (70, 120, 60))
+        for sx in (-1, 1):
+            b.capsule(r * 0.25, height * 0.35, (sx * r * 0.7, 0, z0 + height * 0.55), (70, 120, 60))

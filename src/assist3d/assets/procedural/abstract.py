@@ -145,7 +145,8 @@ def ring_shape(rng: np.random.Generator) -> Shape:
     R = u(rng, 0.03, 0.12)
     r = R * u(rng, 0.1, 0.45)
     rot = rot_x(np.pi / 2) if rng.random() < 0.4 else None
-    b.torus(R, r, (0, 0, 0), _color(rng), sections=int(choice(rng, (6, 12, 24))), minor_sections=int(choice(rng, (4, 8))),
+    b.torus(R, r, (0, 0, 0), _color(rng), sections=int(choice(rng, (6, 12, 24))), minor_sections=int(choice(rng,
+            (4, 8))),
             rot=rot)
     return b.finish("ring")
 

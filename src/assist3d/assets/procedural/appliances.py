@@ -5,9 +5,9 @@ from __future__ import annotations
 import manifold3d as mf
 import numpy as np
 
-from ._build import (DARK, GLASS, WHITE, MeshBuilder, Shape, ceramic, fabric, leaf, material, metal, paint, plastic,
+from ._build import (DARK, GLASS, WHITE, MeshBuilder, Shape, ceramic, fabric, material, metal, paint, plastic,
                      rect_support, rot_x, wood)
-from ._parts import choice, doors, handle, u
+from ._parts import choice, doors, flower_pot, foliage, handle, u
 from ._registry import family
 
 
@@ -156,44 +156,12 @@ def piano(rng: np.random.Generator) -> Shape:
     return b.finish("piano", supports=[rect_support(-w / 2, w / 2, -d / 2 + kd, d / 2, h, inset=0.03)])
 
 
-def _pot(b: MeshBuilder, rng: np.random.Generator, r: float, h: float, color) -> None:
-    """A flower pot with a rim and soil, base at z = 0."""
-    top = r
-    bottom = r * u(rng, 0.65, 0.9)
-    b.lathe([(bottom, 0), (top, h), (top + 0.012, h), (top + 0.012, h + 0.02), (top - 0.01, h + 0.02),
-             (top - 0.01, h - 0.02), (0, h - 0.02)], color, sections=20)
-
-
-def _foliage(b: MeshBuilder, rng: np.random.Generator, r: float, z0: float, height: float) -> None:
-    kind = choice(rng, ("bush", "tree", "palm", "cactus"))
-    green = leaf(rng)
-    if kind == "bush":
-        for _ in range(int(rng.integers(3, 7))):
-            c = (rng.uniform(-r, r) * 0.6, rng.uniform(-r, r) * 0.6, z0 + rng.uniform(0.3, 0.75) * height)
-            rr = u(rng, 0.45, 0.8) * max(r, height * 0.3)
-            b.ellipsoid((rr, rr * u(rng, 0.8, 1.2), min(rr, height * 0.3)), c, green)
-    elif kind == "tree":
-        b.cylinder(max(0.01, r * 0.08), height * 0.55, (0, 0, z0 - 0.02), (90, 65, 40), sections=8)
-        rr = max(r * 1.3, height * 0.25)
-        b.ellipsoid((rr, rr, height * 0.3), (0, 0, z0 + height * 0.7), green, subdivisions=2)
-    elif kind == "palm":
-        n = int(rng.integers(5, 9))
-        for k in range(n):
-            a = 2 * np.pi * k / n + rng.uniform(-0.2, 0.2)
-            tip = (np.cos(a) * r * 1.6, np.sin(a) * r * 1.6, z0 + height * u(rng, 0.6, 1.0))
-            b.beam((0, 0, z0), tip, max(0.02, r * 0.3), 0.01, green)
-    else:
-        b.capsule(r * 0.55, height * 0.9, (0, 0, z0 + height * 0.45), (70, 120, 60))
-        for sx in (-1, 1):
-            b.capsule(r * 0.25, height * 0.35, (sx * r * 0.7, 0, z0 + height * 0.55), (70, 120, 60))
-
-
 @family("plant_floor", ("floor",))
 def plant_floor(rng: np.random.Generator) -> Shape:
     b = MeshBuilder()
     r, ph = u(rng, 0.12, 0.25), u(rng, 0.2, 0.45)
-    _pot(b, rng, r, ph, ceramic(rng))
-    _foliage(b, rng, r, ph, u(rng, 0.5, 1.4))
+    flower_pot(b, rng, r, ph, ceramic(rng))
+    foliage(b, rng, r, ph, u(rng, 0.5, 1.4))
     return b.finish("plant")
 
 

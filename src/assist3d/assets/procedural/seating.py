@@ -9,7 +9,8 @@ from ._parts import choice, cushion, four_legs, star_base, u
 from ._registry import family
 
 
-def _chair_back(b: MeshBuilder, rng: np.random.Generator, w: float, y_back: float, z0: float, z1: float, color) -> float:
+def _chair_back(b: MeshBuilder, rng: np.random.Generator, w: float, y_back: float, z0: float, z1: float,
+        color) -> float:
     """Posts and a slatted, ladder or panel back at the rear edge; returns its thickness."""
     t = u(rng, 0.025, 0.04)
     y0 = y_back - t
@@ -49,7 +50,8 @@ def chair(rng: np.random.Generator) -> Shape:
         shell, legs = plastic(rng), metal(rng)
         st = 0.015
         b.slab(-w / 2, w / 2, -d / 2, d / 2, sh - st, sh, shell)
-        four_legs(b, rng, half_x - 0.02, half_y - 0.02, sh - st, legs, thick=0.022, style=choice(rng, ("round", "splayed")))
+        four_legs(b, rng, half_x - 0.02, half_y - 0.02, sh - st, legs, thick=0.022, style=choice(rng, ("round",
+                "splayed")))
         tilt = u(rng, 0.08, 0.25)
         bh = u(rng, 0.3, 0.45)
         b.box((w, 0.015, bh), (0, d / 2 - 0.0075 + np.sin(tilt) * bh / 2, sh - 0.01 + np.cos(tilt) * bh / 2), shell,
@@ -188,7 +190,8 @@ def stool(rng: np.random.Generator) -> Shape:
         rr = r * 0.75
         for k in range(n):
             a = 2 * np.pi * k / n + 0.3
-            b.bar((np.cos(a) * rr * 1.25, np.sin(a) * rr * 1.25, 0), (np.cos(a) * rr * 0.85, np.sin(a) * rr * 0.85, h - st),
+            b.bar((np.cos(a) * rr * 1.25, np.sin(a) * rr * 1.25, 0), (np.cos(a) * rr * 0.85,
+                    np.sin(a) * rr * 0.85, h - st),
                   0.016, frame)
         if rng.random() < 0.6:
             zr = h * u(rng, 0.25, 0.4)
@@ -302,5 +305,6 @@ def bunk_bed(rng: np.random.Generator) -> Shape:
     for sy in (-length / 2 + 0.1, -length / 2 + 0.5):
         b.slab(lx, lx + 0.05, sy, sy + 0.04, 0, up_z + mh + 0.3, frame)
     for k in range(1, 5):
-        b.slab(lx, lx + 0.05, -length / 2 + 0.1, -length / 2 + 0.54, k * (up_z + mh) / 5, k * (up_z + mh) / 5 + 0.03, frame)
+        b.slab(lx, lx + 0.05, -length / 2 + 0.1, -length / 2 + 0.54, k * (up_z + mh) / 5,
+                k * (up_z + mh) / 5 + 0.03, frame)
     return b.finish("bunk bed", supports=sups)

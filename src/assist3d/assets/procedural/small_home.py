@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._build import (DARK, GLASS, WHITE, MeshBuilder, Shape, any_color, ceramic, fabric, leaf, material, metal, paint,
+from ._build import (DARK, GLASS, WHITE, MeshBuilder, Shape, any_color, as_rgb, ceramic, fabric, leaf, material, metal,
                      plastic, rect_support, rot_x, rot_y, rot_z, wood)
-from ._parts import choice, u
+from ._parts import choice, flower_pot, foliage, u
 from ._registry import family
-from .appliances import _foliage, _pot
 
 
 def _vessel(b: MeshBuilder, rng: np.random.Generator, outer: list[tuple[float, float]], wall: float, color,
@@ -20,7 +19,8 @@ def _vessel(b: MeshBuilder, rng: np.random.Generator, outer: list[tuple[float, f
     inner[:, 0] = np.maximum(inner[:, 0] - wall, 1e-3)
     inner[-1, 1] = max(inner[-1, 1], o[0, 1]) + wall
     inner = inner[inner[:, 1] >= o[0, 1] + wall - 1e-9]
-    prof = [(float(r), float(z)) for r, z in o] + [(float(r), float(z)) for r, z in inner] + [(0.0, float(o[0, 1] + wall))]
+    prof = [(float(r), float(z)) for r, z in o] + [(float(r), float(z)) for r, z in inner] + [(0.0, float(o[0,
+            1] + wall))]
     b.lathe(prof, color, sections=sections)
 
 
@@ -50,17 +50,15 @@ def bottle(rng: np.random.Generator) -> Shape:
     r, h = u(rng, 0.025, 0.05), u(rng, 0.18, 0.35)
     neck = r * u(rng, 0.3, 0.5)
     shoulder = h * u(rng, 0.5, 0.75)
-    c = choice(rng, ((60, 110, 60), (110, 70, 30), (200, 220, 225), (40, 40, 45))) if rng.random() < 0.6 else plastic(rng)
+    c = choice(rng, ((60, 110, 60), (110, 70, 30), (200, 220, 225), (40, 40,
+            45))) if rng.random() < 0.6 else plastic(rng)
     prof = [(r, 0.0), (r, shoulder), (r * 0.8, shoulder + (h - shoulder) * 0.3), (neck, h * 0.88), (neck, h - 0.02)]
-    b.lathe([(0.0, 0.0)] + prof + [(0.0, h - 0.02)], jitter_safe(c), sections=16)
+    b.lathe([(0.0, 0.0)] + prof + [(0.0, h - 0.02)], as_rgb(c), sections=16)
     b.cylinder(neck * 1.15, 0.025, (0, 0, h - 0.025), any_color(rng), sections=12)
     if rng.random() < 0.6:  # label
         b.cylinder(r * 1.01, shoulder * 0.5, (0, 0, shoulder * 0.3), any_color(rng), sections=16)
     return b.finish(choice(rng, ("bottle", "bottle", "water bottle", "wine bottle")) if h > 0.28 else "bottle")
 
-
-def jitter_safe(c) -> tuple[int, int, int]:
-    return (int(c[0]), int(c[1]), int(c[2]))
 
 
 @family("bowl", ("obj",))
@@ -83,7 +81,8 @@ def plate(rng: np.random.Generator) -> Shape:
     c = ceramic(rng)
     n = int(rng.integers(1, 5))
     for k in range(n):
-        b.lathe([(r * 0.6, k * 0.018), (r, k * 0.018 + 0.015), (r - 0.01, k * 0.018 + 0.018), (r * 0.6, k * 0.018 + 0.006),
+        b.lathe([(r * 0.6, k * 0.018), (r, k * 0.018 + 0.015), (r - 0.01, k * 0.018 + 0.018), (r * 0.6,
+                k * 0.018 + 0.006),
                  (0, k * 0.018 + 0.006)], c, sections=24)
     return b.finish("plate", extra={"stacked": n})
 
@@ -115,7 +114,8 @@ def cooking_pot(rng: np.random.Generator) -> Shape:
     c = metal(rng)
     _vessel(b, rng, [(r, 0.0), (r, h)], 0.004, c)
     for sx in (-1, 1):
-        b.slab(sx * r - (0 if sx > 0 else 0.04), sx * r + (0.04 if sx > 0 else 0), -0.015, 0.015, h - 0.03, h - 0.015, DARK)
+        b.slab(sx * r - (0 if sx > 0 else 0.04), sx * r + (0.04 if sx > 0 else 0), -0.015, 0.015, h - 0.03,
+                h - 0.015, DARK)
     if rng.random() < 0.6:
         b.cylinder(r + 0.005, 0.008, (0, 0, h), c, sections=24, top_radius=r * 0.9)
         b.ellipsoid((0.02, 0.02, 0.015), (0, 0, h + 0.012), DARK)
@@ -218,7 +218,7 @@ def box(rng: np.random.Generator) -> Shape:
         b.slab(-0.03, 0.03, -d / 2 - 0.001, d / 2 + 0.001, 0, h + 0.001, (200, 180, 140))
     elif rng.random() < 0.5:  # lid
         b.slab(-w / 2 - 0.005, w / 2 + 0.005, -d / 2 - 0.005, d / 2 + 0.005, h - min(0.04, h / 3), h + 0.003,
-               jitter_safe(np.clip(np.array(c) * 0.8, 0, 255)))
+               as_rgb(np.clip(np.array(c) * 0.8, 0, 255)))
         h = h + 0.003
     sup = []
     if w > 0.15 and d > 0.15 and not cardboard:
@@ -293,8 +293,8 @@ def table_lamp(rng: np.random.Generator) -> Shape:
 def plant_small(rng: np.random.Generator) -> Shape:
     b = MeshBuilder()
     r, ph = u(rng, 0.04, 0.1), u(rng, 0.05, 0.14)
-    _pot(b, rng, r, ph, ceramic(rng) if rng.random() < 0.7 else plastic(rng))
-    _foliage(b, rng, r, ph, u(rng, 0.08, 0.4))
+    flower_pot(b, rng, r, ph, ceramic(rng) if rng.random() < 0.7 else plastic(rng))
+    foliage(b, rng, r, ph, u(rng, 0.08, 0.4))
     return b.finish("plant")
 
 
@@ -305,7 +305,8 @@ def photo_frame(rng: np.random.Generator) -> Shape:
     c = material(rng)
     tilt = rot_x(-u(rng, 0.1, 0.25))
     b.box((w, 0.015, h), (0, 0, h / 2), c, rot=tilt)
-    b.box((w - 0.02, 0.004, h - 0.02), tilt @ np.array([0, -0.008, 0]) + np.array([0, 0, h / 2]), any_color(rng), rot=tilt)
+    b.box((w - 0.02, 0.004, h - 0.02), tilt @ np.array([0, -0.008, 0]) + np.array([0, 0, h / 2]),
+            any_color(rng), rot=tilt)
     b.beam((0, 0.0, h * 0.5), (0, h * 0.35, 0.0), 0.02, 0.006, c)
     return b.finish("picture")
 
@@ -325,7 +326,7 @@ def fruit(rng: np.random.Generator) -> Shape:
     if kind in ("apple", "orange"):
         r = u(rng, 0.035, 0.05)
         col = choice(rng, ((190, 30, 30), (120, 180, 60), (230, 200, 60))) if kind == "apple" else (240, 140, 30)
-        b.ellipsoid((r, r, r * 0.92), (0, 0, r * 0.92), jitter_safe(col), subdivisions=2)
+        b.ellipsoid((r, r, r * 0.92), (0, 0, r * 0.92), as_rgb(col), subdivisions=2)
         b.cylinder(0.003, 0.015, (0, 0, r * 1.8), (90, 60, 30), sections=5)
     elif kind == "pear":
         b.lathe([(0.035, 0.005), (0.04, 0.03), (0.02, 0.08), (0.012, 0.1)], (190, 200, 80), sections=16)
@@ -347,7 +348,7 @@ def fruit(rng: np.random.Generator) -> Shape:
             rr = u(rng, 0.03, 0.045)
             d = u(rng, 0, r - rr - 0.01)
             b.ellipsoid((rr, rr, rr), (np.cos(a) * d, np.sin(a) * d, 0.04 + rr * 0.5),
-                        jitter_safe(choice(rng, ((190, 30, 30), (240, 140, 30), (120, 180, 60)))))
+                        as_rgb(choice(rng, ((190, 30, 30), (240, 140, 30), (120, 180, 60)))))
     return b.finish(kind)
 
 
@@ -442,13 +443,14 @@ def bag(rng: np.random.Generator) -> Shape:
         for sx in (-1, 1):
             b.cylinder(0.025, 0.02, (sx * (w / 2 - 0.05) - 0.01, d / 2 - 0.04, 0.025), DARK, sections=10,
                        rot=rot_y(np.pi / 2))
-            b.slab(sx * (w / 2 - 0.05) - 0.015, sx * (w / 2 - 0.05) + 0.015, d / 2 - 0.06, d / 2 - 0.02, 0.0, 0.04, DARK)
+            b.slab(sx * (w / 2 - 0.05) - 0.015, sx * (w / 2 - 0.05) + 0.015, d / 2 - 0.06, d / 2 - 0.02, 0.0,
+                    0.04, DARK)
         b.slab(-0.1, 0.1, -0.015, 0.015, h, h + 0.04, DARK)
     elif kind == "backpack":
         w, d, h = u(rng, 0.28, 0.36), u(rng, 0.14, 0.22), u(rng, 0.38, 0.5)
         b.slab(-w / 2, w / 2, -d / 2 + 0.05, d / 2, 0, h - w / 2 * 0.5, c)
         b.ellipsoid((w / 2, d / 2 - 0.025, w / 4), (0, 0.025, h - w / 4), c)
-        b.slab(-w / 2 + 0.04, w / 2 - 0.04, -d / 2, -d / 2 + 0.05, 0.03, h * 0.45, jitter_safe(np.array(c) * 0.8))
+        b.slab(-w / 2 + 0.04, w / 2 - 0.04, -d / 2, -d / 2 + 0.05, 0.03, h * 0.45, as_rgb(np.array(c) * 0.8))
     else:
         w, d, h = u(rng, 0.3, 0.5), u(rng, 0.12, 0.2), u(rng, 0.2, 0.35)
         b.cylinder(w / 2, h, (0, 0, 0), c, sections=16, radius_y=d / 2, top_radius=w / 2 * 0.85)

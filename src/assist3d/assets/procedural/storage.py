@@ -160,7 +160,8 @@ def tv_stand(rng: np.random.Generator) -> Shape:
     doors(b, rng, -w / 2 + t, -ow / 2 - t, z0 + 0.02, h - t, -d / 2, 1, front)
     doors(b, rng, ow / 2 + t, w / 2 - t, z0 + 0.02, h - t, -d / 2, 1, front)
     sups = _top(w, d, h)
-    sups.append(rect_support(-ow / 2, ow / 2, -d / 2, d / 2 - 0.01, z0 + 0.02, inset=0.015, clearance=h - t - z0 - 0.02))
+    sups.append(rect_support(-ow / 2, ow / 2, -d / 2, d / 2 - 0.01, z0 + 0.02, inset=0.015,
+            clearance=h - t - z0 - 0.02))
     return b.finish("tv stand", supports=sups)
 
 
@@ -179,7 +180,8 @@ def kitchen_counter(rng: np.random.Generator) -> Shape:
     for k in range(units):
         x0 = -w / 2 + k * uw
         if rng.random() < 0.35:
-            drawer_grid(b, rng, x0 + 0.005, x0 + uw - 0.005, 0.11, h - ct - 0.005, -d / 2 + 0.03, int(rng.integers(2, 4)),
+            drawer_grid(b, rng, x0 + 0.005, x0 + uw - 0.005, 0.11, h - ct - 0.005, -d / 2 + 0.03,
+                    int(rng.integers(2, 4)),
                         1, body)
         else:
             drawer_grid(b, rng, x0 + 0.005, x0 + uw - 0.005, h - ct - 0.16, h - ct - 0.005, -d / 2 + 0.03, 1, 1, body)

@@ -100,7 +100,8 @@ def table_side(rng: np.random.Generator) -> Shape:
         return b.finish("end table", supports=[disc_support(0, 0, r, h)])
     w, d = u(rng, 0.35, 0.6), u(rng, 0.35, 0.55)
     b.slab(-w / 2, w / 2, -d / 2, d / 2, h - 0.025, h, top)
-    four_legs(b, rng, w / 2 - 0.03, d / 2 - 0.03, h - 0.025, body, thick=0.035, style=choice(rng, ("square", "tapered")))
+    four_legs(b, rng, w / 2 - 0.03, d / 2 - 0.03, h - 0.025, body, thick=0.035, style=choice(rng, ("square",
+            "tapered")))
     if rng.random() < 0.5:
         b.slab(-w / 2 + 0.04, w / 2 - 0.04, -d / 2 + 0.03, d / 2 - 0.03, h - 0.16, h - 0.025, body)
         drawer_grid(b, rng, -w / 2 + 0.05, w / 2 - 0.05, h - 0.155, h - 0.03, -d / 2 + 0.03, 1, 1, top)
@@ -121,7 +122,8 @@ def desk(rng: np.random.Generator) -> Shape:
         x0 = side * (w / 2 - 0.01) - (pw if side > 0 else 0)
         x1 = x0 + pw
         b.slab(x0, x1, -d / 2 + 0.02, d / 2 - 0.01, 0, h - t, body)
-        drawer_grid(b, rng, x0 + 0.01, x1 - 0.01, 0.05, h - t - 0.01, -d / 2 + 0.02, int(rng.integers(2, 5)), 1, body, hc)
+        drawer_grid(b, rng, x0 + 0.01, x1 - 0.01, 0.05, h - t - 0.01, -d / 2 + 0.02, int(rng.integers(2, 5)), 1,
+                body, hc)
         ox = -side * (w / 2 - 0.03)
         b.slab(ox - 0.02, ox + 0.02, -d / 2 + 0.03, d / 2 - 0.01, 0, h - t, body)
     elif style == "legs":
@@ -129,7 +131,8 @@ def desk(rng: np.random.Generator) -> Shape:
         b.slab(-w / 2 + 0.05, w / 2 - 0.05, d / 2 - 0.07, d / 2 - 0.05, h - t - 0.3, h - t, body)
     else:
         for sx in (-1, 1):
-            b.slab(sx * (w / 2 - 0.01) - 0.015, sx * (w / 2 - 0.01) + 0.015, -d / 2 + 0.02, d / 2 - 0.01, 0, h - t, body)
+            b.slab(sx * (w / 2 - 0.01) - 0.015, sx * (w / 2 - 0.01) + 0.015, -d / 2 + 0.02, d / 2 - 0.01, 0,
+                    h - t, body)
         b.slab(-w / 2 + 0.02, w / 2 - 0.02, d / 2 - 0.04, d / 2 - 0.02, 0.15, h - t, body)
     return b.finish("desk", supports=[rect_support(-w / 2, w / 2, -d / 2, d / 2, h)])
 

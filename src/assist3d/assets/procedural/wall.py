@@ -188,7 +188,8 @@ def bulletin_board(rng: np.random.Generator) -> Shape:
         pw, ph = u(rng, 0.08, 0.21), u(rng, 0.1, 0.28)
         x = u(rng, -w / 2 + 0.03 + pw / 2, w / 2 - 0.03 - pw / 2)
         z = u(rng, 0.03, h - 0.03 - ph)
-        b.slab(x - pw / 2, x + pw / 2, -0.018, -0.015, z, z + ph, (245, 245, 240) if rng.random() < 0.6 else any_color(rng))
+        b.slab(x - pw / 2, x + pw / 2, -0.018, -0.015, z, z + ph, (245, 245,
+                240) if rng.random() < 0.6 else any_color(rng))
     return b.finish("bulletin board", elevation=_elev(1.45, h, rng))
 
 
