@@ -15,7 +15,10 @@ import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterable
+from contextlib import contextmanager
+from typing import Callable, Iterable, Iterator
+
+import numpy as np
 
 from .config import GenerateConfig, config_to_dict, dump_config
 from .errors import ConfigError
@@ -92,7 +95,7 @@ class Generator:
         meta = {
             "id": sid, "index": job.index, "seed": seed, "dataset_seed": cfg.seed,
             "instances": len(layout.instances),
-            "instances_with_points": int(len(set(res.sample.instance.tolist()) - {-1})),
+            "instances_with_points": int(np.count_nonzero(np.unique(res.sample.instance) >= 0)),
             "dropped": len(layout.dropped), "planner": dict(layout.planner),
             "vantage_points": [[round(float(v), 6) for v in c] for c in res.centers],
             "render": res.stats, "triangles": int(len(mesh.faces)),
@@ -151,6 +154,24 @@ class DatasetRun:
     failed_checks: list[str]
 
 
+@contextmanager
+def _folder_lock(out: Path) -> Iterator[None]:
+    """Hold an exclusive lock on ``out`` (released by the OS even on SIGKILL)."""
+    import fcntl
+
+    from .errors import DataError
+
+    with open(out / ".generate.lock", "a+b") as f:
+        try:
+            fcntl.flock(f.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            raise DataError(f"{out}: another `assist3d generate` is writing this folder") from None
+        try:
+            yield
+        finally:
+            fcntl.flock(f.fileno(), fcntl.LOCK_UN)
+
+
 def _existing_scenes(out: Path) -> list[int]:
     if not out.is_dir():
         return []
@@ -194,58 +215,59 @@ def generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int
     manifest = Manifest(out, cfg_dict, cfg.seed, classes, assets_label)
     manifest.check_compatible()
     out.mkdir(parents=True, exist_ok=True)
-    if remove_stale_temps(out):
-        log.info("removed temporary files of an interrupted run in %s", out)
-    dump_config(cfg, out / "config.yaml")
+    with _folder_lock(out):
+        if remove_stale_temps(out):
+            log.info("removed temporary files of an interrupted run in %s", out)
+        dump_config(cfg, out / "config.yaml")
 
-    todo: list[int] = []
-    skipped: list[int] = []
-    wanted = set(indices)
-    for i in _existing_scenes(out):
-        meta = read_scene_meta(out / scene_name(i), check_files=i in wanted)
-        ok = meta is not None and meta.get("seed") == scene_seed(cfg.seed, i)
-        if ok:
-            manifest.add(meta)
-            if i in wanted:
-                skipped.append(i)
-    for i in indices:
-        if i not in skipped:
-            todo.append(i)
-    if skipped:
-        log.info("resume: %d of %d scenes already complete in %s", len(skipped), len(indices), out)
-    manifest.write()
-    if on_start:
-        on_start(len(indices), len(skipped))
-    for i in skipped:
-        if on_scene:
-            on_scene(next(e for e in manifest.entries if e.get("index") == i), True)
-
-    generated: list[dict] = []
-    failed: list[str] = []
-
-    def done(meta: dict) -> None:
-        generated.append(meta)
-        manifest.add(meta)
+        todo: list[int] = []
+        skipped: list[int] = []
+        wanted = set(indices)
+        for i in _existing_scenes(out):
+            meta = read_scene_meta(out / scene_name(i), check_files=i in wanted)
+            ok = meta is not None and meta.get("seed") == scene_seed(cfg.seed, i)
+            if ok:
+                manifest.add(meta)
+                if i in wanted:
+                    skipped.append(i)
+        for i in indices:
+            if i not in skipped:
+                todo.append(i)
+        if skipped:
+            log.info("resume: %d of %d scenes already complete in %s", len(skipped), len(indices), out)
         manifest.write()
-        if verify and not meta.get("check", {}).get("ok", True):
-            failed.append(meta["id"])
-        if on_scene:
-            on_scene(meta, False)
+        if on_start:
+            on_start(len(indices), len(skipped))
+        for i in skipped:
+            if on_scene:
+                on_scene(next(e for e in manifest.entries if e.get("index") == i), True)
 
-    jobs = [SceneJob(i, str(out), verify) for i in todo]
-    if gen is not None:
-        for job in jobs:
-            done(gen.scene(job))
-    elif jobs:
-        ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn")
-        with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=ctx, initializer=_init_worker,
-                                 initargs=(cfg_dict, threads)) as pool:
-            pending = {pool.submit(_run_job, j) for j in jobs}
-            while pending:
-                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for f in finished:
-                    done(f.result())
-    return DatasetRun(out, indices, skipped, generated, manifest, failed)
+        generated: list[dict] = []
+        failed: list[str] = []
+
+        def done(meta: dict) -> None:
+            generated.append(meta)
+            manifest.add(meta)
+            manifest.write()
+            if verify and not meta.get("check", {}).get("ok", True):
+                failed.append(meta["id"])
+            if on_scene:
+                on_scene(meta, False)
+
+        jobs = [SceneJob(i, str(out), verify) for i in todo]
+        if gen is not None:
+            for job in jobs:
+                done(gen.scene(job))
+        elif jobs:
+            ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn")
+            with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=ctx, initializer=_init_worker,
+                                     initargs=(cfg_dict, threads)) as pool:
+                pending = {pool.submit(_run_job, j) for j in jobs}
+                while pending:
+                    finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    for f in finished:
+                        done(f.result())
+        return DatasetRun(out, indices, skipped, generated, manifest, failed)
 
 
 def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, out: str | None = None,

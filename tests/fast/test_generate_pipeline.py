@@ -27,6 +27,9 @@ TINY = {
     "assets": {"procedural_count": 60},
     "selection": {"floor_count": 6, "wall_count": 2, "on_top_count": 1},
     "room": {"area_min": 10.0, "area_max": 16.0},
+    # the layout search also stops on a wall-clock budget, which makes layouts depend on machine
+    # load; a generous budget lets its node/backtrack limits (deterministic) end it instead
+    "layout": {"group_budget_s": 120.0},
     "render": {"width": 80, "height": 60, "fx": 72.2, "fy": 72.2, "vantage_points": 2, "views_per_point": 6},
 }
 FILES = ("coord.npy", "color.npy", "normal.npy", "instance.npy", "segment.npy")
@@ -47,8 +50,13 @@ def dataset_bytes(root: Path) -> dict[str, dict[str, bytes]]:
 
 @pytest.fixture(scope="module")
 def full_run(tmp_path_factory):
+    # a module fixture runs before conftest's per-test cache isolation: point it at the same
+    # isolated cache folder explicitly, never at the user's
     out = tmp_path_factory.mktemp("full")
-    run = generate_dataset(parse_config(TINY), out, range(3), verify=True)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("ASSIST3D_CACHE", str(tmp_path_factory.getbasetemp() / "assist3d-cache"))
+        mp.delenv("ASSIST3D_ASSETS", raising=False)
+        run = generate_dataset(parse_config(TINY), out, range(3), verify=True)
     return out, run
 
 
@@ -85,7 +93,10 @@ def test_scene_alone_and_with_two_workers_equal_the_full_run(full_run, tmp_path)
     ref = dataset_bytes(out)
     alone = tmp_path / "alone"
     generate_dataset(parse_config(TINY), alone, [2])
-    assert dataset_bytes(alone) == {"scene_000002": ref["scene_000002"]}
+    got = dataset_bytes(alone)
+    assert set(got) == {"scene_000002"}
+    differ = [k for k, v in got["scene_000002"].items() if v != ref["scene_000002"][k]]
+    assert differ == []
     pooled = tmp_path / "pooled"
     run = generate_dataset(parse_config(TINY), pooled, range(3), workers=2)
     assert len(run.generated) == 3
@@ -161,3 +172,17 @@ def test_generate_show_and_bench_commands(full_run, tmp_path):
     assert set(bench["seconds_per_scene"]) == {"median", "max"}
     assert set(bench["stages"]) == {"select", "layout", "assemble", "render", "fuse", "write"}
     assert bench["scenes"] == 2 and 0 < bench["peak_memory_mb"] < 4000
+
+
+def test_a_second_writer_on_the_same_folder_is_refused(full_run):
+    import fcntl
+
+    from assist3d.errors import DataError
+
+    out, _ = full_run
+    with open(out / ".generate.lock", "a+b") as f:
+        fcntl.flock(f.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        with pytest.raises(DataError, match="another"):
+            generate_dataset(parse_config(TINY), out, range(3))
+        fcntl.flock(f.fileno(), fcntl.LOCK_UN)
+    assert generate_dataset(parse_config(TINY), out, range(3)).skipped == [0, 1, 2]

@@ -30,7 +30,7 @@ def instance_palette(count: int) -> np.ndarray:
 def instance_colors(instance: np.ndarray) -> np.ndarray:
     """(N, 3) uint8 colour per point: a palette colour per instance id, grey for -1."""
     instance = np.asarray(instance)
-    out = np.empty((len(instance), 3), np.uint8)
+    out = np.zeros((len(instance), 3), np.uint8)
     out[:] = BACKGROUND_RGB
     obj = instance >= 0
     if obj.any():

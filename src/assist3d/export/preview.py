@@ -126,7 +126,7 @@ def render_preview(scene_dir: str | Path, out_png: str | Path, *, seed: int = 0)
         idx = np.sort(np.random.default_rng(seed).choice(n, MAX_POINTS, replace=False))
     top = max(int(instance.max(initial=-1)), max((i.id for i in layout.instances), default=-1)) + 1
     palette = instance_colors(np.arange(top)) if top else np.zeros((0, 3), np.uint8)
-    inst_rgb = np.empty((n, 3), np.uint8)
+    inst_rgb = np.zeros((n, 3), np.uint8)
     inst_rgb[:] = BACKGROUND_RGB
     obj = instance >= 0
     inst_rgb[obj] = palette[instance[obj]]

@@ -56,7 +56,7 @@ def pixel_directions(width: int, height: int, fx: float, fy: float, cx: float, c
     """(H*W, 3) float64 camera-frame ray directions through pixel centres, z = 1, row-major."""
     u = (np.arange(width, dtype=np.float64) - cx) / fx
     v = (np.arange(height, dtype=np.float64) - cy) / fy
-    d = np.empty((height, width, 3))
+    d = np.zeros((height, width, 3))
     d[..., 0] = u[None, :]
     d[..., 1] = v[:, None]
     d[..., 2] = 1.0
@@ -70,7 +70,7 @@ def rotate_directions(cam_dirs: np.ndarray, pose: np.ndarray) -> np.ndarray:
     single-threaded around it (threadpoolctl) when rendering from several threads.
     """
     d = np.ascontiguousarray(cam_dirs, dtype=np.float32)
-    out = np.empty_like(d)
+    out = np.zeros_like(d)
     np.dot(d, pose[:3, :3].T.astype(np.float32), out=out)
     return out
 

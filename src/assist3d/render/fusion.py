@@ -74,7 +74,7 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
         cam = cameras[i]
         dirs = rotate_directions(cam_dirs, cam.pose)
         center = cam.pose[:3, 3].astype(np.float32)
-        origins = np.empty_like(dirs)
+        origins = np.zeros_like(dirs)
         for j in range(3):
             origins[:, j] = center[j]
         t, face = caster.cast(origins, dirs)
@@ -85,7 +85,7 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
         fh = face[pix]
         counts = np.bincount(inst_shift[fh], minlength=n_ids)
         tp = t[pix]
-        pts = np.empty((len(pix), 3), np.float32)
+        pts = np.zeros((len(pix), 3), np.float32)
         for j in range(3):  # column by column: (N, 3) broadcasts are slow
             col = dirs[:, j][pix]
             col *= tp

@@ -48,7 +48,7 @@ def render_view(scene: SceneMesh, caster: RayCaster, camera: Camera, *, shading:
     id and hit triangle per pixel."""
     cam_dirs = pixel_directions(camera.width, camera.height, camera.fx, camera.fy, camera.cx, camera.cy)
     dirs = world_directions(camera, cam_dirs)
-    origins = np.empty_like(dirs)
+    origins = np.zeros_like(dirs)
     origins[:] = camera.pose[:3, 3].astype(np.float32)
     t, face = caster.cast(origins, dirs)
     hit = face >= 0

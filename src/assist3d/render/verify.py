@@ -58,7 +58,7 @@ def verify_labels(scene: SceneMesh, caster: RayCaster, sample: PointSample, cent
         if len(todo) == 0:
             break
         d = coord[todo] - c
-        origins = np.empty_like(d)
+        origins = np.zeros_like(d)
         origins[:] = c
         t, face = caster.cast(origins, d)
         length = np.linalg.norm(d, axis=1)
