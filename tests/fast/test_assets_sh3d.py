@@ -74,6 +74,8 @@ def crafted_sh3f(tmp_path: Path) -> Path:
     props += model_props(9, "Rotated", "good/marker.obj", w=60, d=30, h=90, modelRotation="1 0 0 0 0 1 0 -1 0")
     props += model_props(10, "Front marker", "good/marker.obj", w=60, d=30, h=90)
     props += model_props(11, "Bad size", "good/box.obj", w="abc")
+    props += model_props(12, "Bad elevation", "good/box.obj", elevation="high")
+    props += model_props(13, "Bad rotation", "good/box.obj", modelRotation="1 0 0")
     path = tmp_path / "Crafted.sh3f"
     with zipfile.ZipFile(path, "w") as z:
         z.writestr("PluginFurnitureCatalog.properties", props.encode("iso-8859-1"))
@@ -149,6 +151,8 @@ def test_crafted_catalog_good_models_import_and_bad_ones_are_skipped(tmp_path, c
     assert any("'Window'" in p and "door or window" in r for p, r in reasons.items()), joined
     assert any("properties" in p and "uxxxx" in r.lower() for p, r in reasons.items()), joined
     assert any("'Bad size'" in p and "width" in r for p, r in reasons.items()), joined
+    assert any("'Bad elevation'" in p and "elevation" in r for p, r in reasons.items()), joined
+    assert any("'Bad rotation'" in p and "modelRotation" in r for p, r in reasons.items()), joined
     assert all("\n" not in r for r in reasons.values())
     # the texture colour reaches the faces; sizes are the catalog's (cm -> m)
     red = cat.get("sh3d:Crafted/Redbox1")

@@ -243,11 +243,20 @@ def _folder_resolver(folder: Path, base: str):
 
 
 def convert_item(item: MeshItem) -> tuple[AssetRecord, MeshData] | SkippedAsset:
-    """Load and normalise one mesh; a SkippedAsset with the reason on failure."""
+    """Load and normalise one mesh; a SkippedAsset with the reason on failure (never raises for
+    bad content, so one file can never abort a whole import)."""
+    label = f"{Path(item.folder) / item.path} ({item.row})"
+    try:
+        return _convert(item, label)
+    except Exception as e:  # a loader failure on strange data: report it, keep importing
+        log.warning("meshes: unexpected error on %s", label, exc_info=True)
+        return SkippedAsset(label, f"unexpected error ({type(e).__name__}: {e})")
+
+
+def _convert(item: MeshItem, label: str) -> tuple[AssetRecord, MeshData] | SkippedAsset:
     import trimesh
 
     folder = Path(item.folder)
-    label = f"{folder / item.path} ({item.row})"
     try:
         data = (folder / item.path).read_bytes()
         if not data.strip():

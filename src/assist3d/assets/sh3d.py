@@ -329,30 +329,41 @@ def _load_obj(entry: Sh3dEntry):
 
 
 def convert_entry(entry: Sh3dEntry) -> tuple[AssetRecord, MeshData] | SkippedAsset:
-    """Load, normalise and describe one model; a :class:`SkippedAsset` with a reason on failure."""
-    p = entry.props
+    """Load, normalise and describe one model; a :class:`SkippedAsset` with a reason on failure.
+
+    Never raises for bad content: an unexpected error in a third-party loader is reported as
+    the model's skip reason too, so one model can never abort a whole import.
+    """
     try:
-        if p.get("doorOrWindow", "false").strip().lower() == "true":
-            raise MeshRejected("door or window: belongs in a wall opening, not placed as an object")
-        name = p.get("name", "").strip()
-        if not name:
-            raise MeshRejected("no name# key")
-        dims = [_float(p, k) for k in ("width", "depth", "height")]
-        if any(d is None or d <= 0 for d in dims):
-            raise MeshRejected(f"width/depth/height must be positive numbers (got {dims})")
-        size_m = tuple(float(d) / 100.0 for d in dims)  # type: ignore[arg-type]
-        rotation = _model_rotation(p)
-        loaded = _load_obj(entry)
-        norm = normalize_loaded(loaded, rotation=rotation, size=size_m)
+        return _convert(entry)
     except MeshRejected as e:
         return SkippedAsset(entry.label, str(e))
     except (zipfile.BadZipFile, OSError, EOFError, zipfile.LargeZipFile) as e:
         return SkippedAsset(entry.label, f"archive unreadable ({e})")
-    mesh = norm.mesh
+    except Exception as e:  # a bug or a loader failure on strange data: report it, keep importing
+        log.warning("sh3d: unexpected error on %s", entry.label, exc_info=True)
+        return SkippedAsset(entry.label, f"unexpected error ({type(e).__name__}: {e})")
+
+
+def _convert(entry: Sh3dEntry) -> tuple[AssetRecord, MeshData]:
+    p = entry.props
+    if p.get("doorOrWindow", "false").strip().lower() == "true":
+        raise MeshRejected("door or window: belongs in a wall opening, not placed as an object")
+    name = p.get("name", "").strip()
+    if not name:
+        raise MeshRejected("no name# key")
+    dims = [_float(p, k) for k in ("width", "depth", "height")]
+    if any(d is None or d <= 0 for d in dims):
+        raise MeshRejected(f"width/depth/height must be positive numbers (got {dims})")
+    size_m = tuple(float(d) / 100.0 for d in dims)  # type: ignore[arg-type]
     elevation = max(0.0, (_float(p, "elevation") or 0.0) / 100.0)
+    drop = _float(p, "dropOnTopElevation")
+    rotation = _model_rotation(p)
+    loaded = _load_obj(entry)
+    norm = normalize_loaded(loaded, rotation=rotation, size=size_m)
+    mesh = norm.mesh
     category = p.get("category", "").strip()
     supports = extract_supports(mesh)
-    drop = _float(p, "dropOnTopElevation")
     drop_height = None
     if drop is not None and drop > 0:
         drop_height = drop * norm.size[2] if drop <= 1.0 else drop / 100.0
