@@ -111,7 +111,7 @@ def place_group(request: PlanRequest, plan: GroupPlan, catalog: Catalog, *, cfg:
             return PlacementResult((), dropped, 0.0, time.perf_counter() - t0, {"nodes": 0, "notes": notes})
         sup_rec = catalog.get(support.asset)
         sizes.setdefault(support.asset, sup_rec.size)
-        mesh = catalog.load_mesh(sup_rec) if sup_rec.supports else None
+        mesh = catalog.load_mesh(sup_rec)
         problem = OnTopProblem(request.room, items, support, sup_rec.supports, request.placed, sizes, cfg, rng,
                                cfg.max_branch, mesh, (str(catalog.root), sup_rec.id, sup_rec.mesh_file))
     result = depth_first(problem, max_backtracks=cfg.max_backtracks, patience=cfg.patience, budget_s=cfg.group_budget_s)

@@ -1,9 +1,10 @@
 """On-top objects: candidates on a grid inside the support's surfaces.
 
 Each ``SupportSurface`` of the support's asset (height, polygon in the asset frame, optional free
-``clearance`` above) is carried into the world by the support's pose. Candidates lie on a grid
-inside each polygon (step = a tenth of the surface's smaller side, between 2 and 5 cm) at
-``rotations`` yaws turned by a seeded random offset per object. A candidate's footprint must lie
+``clearance`` above) is carried into the world by the support's pose. Candidates lie on the 2 cm
+grid of the surface's height map (:mod:`.surface`, thinned to a few hundred per yaw) at
+``rotations`` yaws aligned with the support plus ``rotations`` yaws turned by a seeded random
+offset per object. A candidate's footprint must lie
 inside the polygon, its height must fit under the surface's clearance and the ceiling, and its
 3-D box must not collide with the other objects on the support nor with anything else placed
 (wall objects overhead, neighbours), and the support's mesh must really carry it there
@@ -18,7 +19,7 @@ import shapely
 
 from ...config import LayoutConfig
 from ...contracts import MeshData, PlacedInstance, Room, SupportSurface
-from ..geometry import InstanceBoxes, boxes_collide, pose_xyz_yaw, rect_corners, rects_in_polygon, world_bounds
+from ..geometry import InstanceBoxes, boxes_collide, pose_xyz_yaw, world_bounds
 from .common import Item, RelationState, order_candidates, target_box
 from .scoring import Candidates
 from .search import Choice
@@ -33,7 +34,7 @@ class OnTopProblem:
     def __init__(self, room: Room, items: list[Item], support: PlacedInstance,
                  surfaces: tuple[SupportSurface, ...], placed: tuple[PlacedInstance, ...],
                  sizes: dict[str, tuple[float, float, float]], cfg: LayoutConfig, rng: np.random.Generator,
-                 max_branch: int, support_mesh: MeshData | None = None, map_key: tuple = ()):
+                 max_branch: int, support_mesh: MeshData, map_key: tuple):
         self.room, self.items, self.cfg, self.rng = room, items, cfg, rng
         self.n = len(items)
         self.max_branch = max_branch
@@ -57,8 +58,8 @@ class OnTopProblem:
         self.yaw_offset = rng.uniform(0.0, step, size=self.n)
         self.cap = cfg.max_on_top_per_support
         self.avoidable_after = np.zeros(self.n + 1, dtype=np.int64)  # avoidable items in k..n-1
-        self._grids = [self._grid(p) for p in self.polys]
-        self.maps = [None if support_mesh is None else surface_map(map_key + (i,), support_mesh, surf, poly.bounds)
+        tri = support_mesh.vertices.astype(np.float64)[support_mesh.faces]
+        self.maps = [surface_map(map_key + (i,), support_mesh, surf, poly, tri)
                      for i, (surf, poly) in enumerate(zip(self.surfaces, self.polys))]
         self._forced: list[str | None] = [None] * self.n
         self._cache: dict[int, Candidates] = {}
@@ -66,41 +67,28 @@ class OnTopProblem:
             self._forced[k] = self._unavoidable(k)
             self.avoidable_after[k] = self.avoidable_after[k + 1] + (self._forced[k] is None)
 
-    @staticmethod
-    def _grid(poly: shapely.Polygon) -> np.ndarray:
-        minx, miny, maxx, maxy = poly.bounds
-        step = float(np.clip(min(maxx - minx, maxy - miny) / 10.0, 0.02, 0.05))
-        gx = np.arange(minx + step / 2, maxx, step)
-        gy = np.arange(miny + step / 2, maxy, step)
-        mx, my = np.meshgrid(gx, gy)
-        pts = np.stack([mx.ravel(), my.ravel()], 1)
-        return pts[shapely.contains_xy(poly, pts[:, 0], pts[:, 1])]
-
     def _raw(self, k: int) -> Candidates:
         """Candidates of item ``k`` that lie inside a surface and fit under its clearance."""
         w, d, h = (float(v) for v in self.items[k].record.size)
         parts: list[Candidates] = []
         rot = max(self.cfg.rotations, 1)
-        yaws = self.yaw_offset[k] + np.arange(rot) * (2 * np.pi / rot)
+        steps = np.arange(rot) * (2 * np.pi / rot)
+        yaws = np.concatenate([steps, self.yaw_offset[k] + steps])  # aligned with the support, and turned
         c, s = np.cos(self.syaw), np.sin(self.syaw)
-        for surf, poly, pts, smap in zip(self.surfaces, self.polys, self._grids, self.maps):
+        for surf, smap in zip(self.surfaces, self.maps):
             if surf.clearance is not None and h > surf.clearance - 0.005:
                 continue
             z = self.sz + surf.height
-            if z + h > self.room.height - 0.02 or len(pts) == 0:
+            if z + h > self.room.height - 0.02:
                 continue
-            lx = np.tile(pts[:, 0], rot)
-            ly = np.tile(pts[:, 1], rot)
-            lyaw = np.repeat(yaws, len(pts))
-            inside = rects_in_polygon(rect_corners(lx, ly, lyaw, w, d), poly)
-            if smap is not None and inside.any():
-                inside[inside] = smap.footprint_ok(lx[inside], ly[inside], lyaw[inside], w, d, h)
-            if not inside.any():
-                continue
-            lx, ly, lyaw = lx[inside], ly[inside], lyaw[inside]
-            wx = self.sx + c * lx - s * ly
-            wy = self.sy + s * lx + c * ly
-            parts.append(Candidates(wx, wy, np.mod(lyaw + self.syaw, 2 * np.pi), np.full_like(wx, z), (w, d, h)))
+            for yaw in yaws:
+                lx, ly = smap.centres(w, d, h, float(yaw))
+                if len(lx) == 0:
+                    continue
+                wx = self.sx + c * lx - s * ly
+                wy = self.sy + s * lx + c * ly
+                parts.append(Candidates(wx, wy, np.full_like(wx, np.mod(yaw + self.syaw, 2 * np.pi)),
+                                        np.full_like(wx, z), (w, d, h)))
         return Candidates.concat(parts, (w, d, h))
 
     def _collide(self, k: int, cands: Candidates, include_moving: bool, include_others: bool = True) -> np.ndarray:

@@ -2,16 +2,21 @@
 
 A ``SupportSurface`` record says "objects can stand at height h inside this polygon"; catalog
 meshes do not always agree (bevelled table tops, cushions above the seat board, a polygon that
-overhangs the model). Before placing on a surface, the surface is sampled on a 2 cm grid in the
-asset frame with two vertical rays per sample (computed exactly by rasterising the mesh's
-triangles onto the grid, no ray-tracing library needed): straight down from 5 cm above the surface (the first
-hit must be within :data:`SUPPORT_TOL` of ``h``: the point is *supported*) and straight up from
-just above it (the distance to the next part of the mesh is the *free height* there; 0 when the
-ray crosses the mesh an odd number of times, i.e. the point is inside the model's material). A
-candidate footprint is accepted when its centre and at least :data:`MIN_SUPPORTED` of a grid of
-points over it (spaced at most one map step, at least 5 x 5) are supported, and the free height
-at every such point (the smallest over the cell's 3 x 3 neighbourhood, so thin legs or rails
-between samples count) exceeds the object's height. Maps are cached per (catalog, asset, surface).
+overhangs the model, a "surface" found inside a closed model). Before placing on a surface, it is
+sampled on a 2 cm grid in the asset frame with two vertical rays per cell, computed exactly by
+rasterising the mesh's triangles onto the grid (no ray-tracing library needed): straight down
+from 5 cm above the surface (the first crossing must be within :data:`SUPPORT_TOL` of ``h``:
+the cell is *supported*) and straight up from the top found (the distance to the next crossing
+is the *free height*; 0 when the ray crosses the mesh an odd number of times, i.e. the cell is
+inside the model's material; each cell keeps the smallest free height of its 3 x 3
+neighbourhood so thin legs and rails between samples count).
+
+For an object of footprint w x d and height z at a yaw, the valid centres are found for the whole
+grid at once with summed-area tables over the window that covers every cell the footprint can
+touch (its axis-aligned box grown by half a cell): every cell of the window must lie entirely
+inside the polygon with enough free height, at least :data:`MIN_SUPPORTED` of them and the
+centre cell must be supported. Maps are cached per
+(catalog, asset, surface).
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 from scipy import ndimage
 
 from ...contracts import MeshData, SupportSurface
@@ -29,7 +35,6 @@ SUPPORT_TOL = 0.005  # the mesh top may differ from the surface height by this m
 MIN_SUPPORTED = 0.6  # fraction of footprint samples that must be supported
 STEP = 0.02  # map resolution, m
 LIFT = 0.05  # the downward rays start this far above the surface, m
-SAMPLES = 5  # footprint samples per side
 
 _CACHE: OrderedDict[tuple, "SurfaceMap"] = OrderedDict()
 _CACHE_SIZE = 256
@@ -40,7 +45,8 @@ _LOCK = threading.Lock()
 class SurfaceMap:
     """Samples of one surface: cell (j, i) is centred at (x0 + i step, y0 + j step), asset frame.
 
-    supported (ny, nx) bool; free (ny, nx) float64 metres (inf when nothing is above).
+    supported (ny, nx) bool; free (ny, nx) float64 metres (inf when nothing is above); inside
+    (ny, nx) bool: the cell lies entirely inside the surface polygon.
     """
 
     x0: float
@@ -48,29 +54,40 @@ class SurfaceMap:
     step: float
     supported: np.ndarray
     free: np.ndarray
+    inside: np.ndarray
 
-    def footprint_ok(self, lx: np.ndarray, ly: np.ndarray, lyaw: np.ndarray, width: float, depth: float,
-                     height: float) -> np.ndarray:
-        """(n,) bool: candidate footprints (centre and yaw in the asset frame) rest on the mesh."""
-        n = len(lx)
-        if n == 0:
-            return np.zeros(0, dtype=bool)
-        nu = int(np.clip(np.ceil(width / self.step) + 1, SAMPLES, 9))
-        nv = int(np.clip(np.ceil(depth / self.step) + 1, SAMPLES, 9))
-        u, v = np.meshgrid(np.linspace(-0.49, 0.49, nu) * width, np.linspace(-0.49, 0.49, nv) * depth)
-        u, v = u.ravel(), v.ravel()
-        c, s = np.cos(lyaw)[:, None], np.sin(lyaw)[:, None]
-        px = lx[:, None] + c * u[None] - s * v[None]
-        py = ly[:, None] + s * u[None] + c * v[None]
-        ny, nx = self.supported.shape
-        i = np.rint((px - self.x0) / self.step).astype(np.int64)
-        j = np.rint((py - self.y0) / self.step).astype(np.int64)
-        on = (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
-        i, j = np.clip(i, 0, nx - 1), np.clip(j, 0, ny - 1)
-        sup = on & self.supported[j, i]
-        free_ok = ~on | (self.free[j, i] > height + 0.002)
-        centre = (nv // 2) * nu + nu // 2  # middle row and column (odd counts) or next to it
-        return sup[:, centre] & (sup.mean(1) >= MIN_SUPPORTED) & free_ok.all(1)
+    def centres(self, width: float, depth: float, height: float, yaw: float,
+                max_count: int = 600) -> tuple[np.ndarray, np.ndarray]:
+        """Local (x, y) centres (k,) where a footprint at ``yaw`` rests on the mesh inside the
+        polygon, thinned to at most about ``max_count`` on a regular sub-grid."""
+        r = 0.5 * self.step
+        c, s = abs(np.cos(yaw)), abs(np.sin(yaw))
+        ex = int(np.ceil((c * width / 2 + s * depth / 2 + r) / self.step - 1e-9))
+        ey = int(np.ceil((s * width / 2 + c * depth / 2 + r) / self.step - 1e-9))
+        good = self.inside & (self.free > height + 0.002)
+        if not good.any():
+            return np.zeros(0), np.zeros(0)
+        area = (2 * ex + 1) * (2 * ey + 1)
+        valid = (_window_sums(good, ex, ey) == area) & self.supported
+        valid &= _window_sums(self.supported, ex, ey) >= MIN_SUPPORTED * area - 1e-9
+        jj, ii = np.nonzero(valid)
+        if len(jj) > max_count:
+            stride = int(np.ceil(np.sqrt(len(jj) / max_count)))
+            keep = (jj % stride == 0) & (ii % stride == 0)
+            if keep.sum() == 0:
+                keep[len(jj) // 2] = True
+            jj, ii = jj[keep], ii[keep]
+        return self.x0 + ii * self.step, self.y0 + jj * self.step
+
+
+def _window_sums(mask: np.ndarray, ex: int, ey: int) -> np.ndarray:
+    """(ny, nx) number of True cells of ``mask`` in the (2 ey + 1) x (2 ex + 1) window around each
+    cell (cells beyond the map count as False), from one summed-area table."""
+    padded = np.pad(mask, ((ey, ey), (ex, ex)), constant_values=False)
+    sat = np.zeros((padded.shape[0] + 1, padded.shape[1] + 1), dtype=np.int32)
+    np.cumsum(np.cumsum(padded, 0, dtype=np.int32), 1, out=sat[1:, 1:])
+    a, b = 2 * ey + 1, 2 * ex + 1
+    return sat[a:, b:] - sat[:-a, b:] - sat[a:, :-b] + sat[:-a, :-b]
 
 
 def _vertical_hits(tri: np.ndarray, gx: np.ndarray, gy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -111,14 +128,16 @@ def _vertical_hits(tri: np.ndarray, gx: np.ndarray, gy: np.ndarray) -> tuple[np.
     return (jj * nx + ii)[inside], z[inside]
 
 
-def surface_map(key: tuple, mesh: MeshData, surf: SupportSurface, bounds: tuple[float, float, float, float]) -> SurfaceMap:
-    """The (cached) map of ``surf`` on ``mesh`` (asset frame) over ``bounds`` (minx, miny, maxx, maxy)."""
+def surface_map(key: tuple, mesh: MeshData, surf: SupportSurface, poly: shapely.Polygon,
+                triangles: np.ndarray | None = None) -> SurfaceMap:
+    """The (cached) map of ``surf`` (polygon ``poly``) on ``mesh`` (asset frame); ``triangles``
+    (t, 3, 3) float64 may pass ``mesh.vertices[mesh.faces]`` when several surfaces share a mesh."""
     with _LOCK:
         hit = _CACHE.get(key)
         if hit is not None:
             _CACHE.move_to_end(key)
             return hit
-    minx, miny, maxx, maxy = bounds
+    minx, miny, maxx, maxy = poly.bounds
     # A tiny offset keeps grid points off the mesh's edges (the polygon came from those edges),
     # so no crossing is counted twice.
     gx = np.arange(minx, maxx + STEP / 2, STEP) + STEP * 0.0137
@@ -126,7 +145,7 @@ def surface_map(key: tuple, mesh: MeshData, surf: SupportSurface, bounds: tuple[
     shape = (len(gy), len(gx))
     n = shape[0] * shape[1]
     h = float(surf.height)
-    tri = mesh.vertices.astype(np.float64)[mesh.faces]
+    tri = mesh.vertices.astype(np.float64)[mesh.faces] if triangles is None else triangles
     tlo, thi = tri.min(1), tri.max(1)
     near = ((thi[:, 0] >= gx[0]) & (tlo[:, 0] <= gx[-1]) & (thi[:, 1] >= gy[0]) & (tlo[:, 1] <= gy[-1])
             & (thi[:, 2] >= h - LIFT))
@@ -147,7 +166,10 @@ def surface_map(key: tuple, mesh: MeshData, surf: SupportSurface, bounds: tuple[
     # Thin parts (legs, ropes, rails) can slip between samples: each cell keeps the smallest free
     # height of its 3 x 3 neighbourhood.
     free_min = ndimage.minimum_filter(free.reshape(shape), size=3, mode="nearest")
-    result = SurfaceMap(float(gx[0]), float(gy[0]), STEP, supported.reshape(shape), free_min)
+    cx, cy = np.meshgrid(np.append(gx - STEP / 2, gx[-1] + STEP / 2), np.append(gy - STEP / 2, gy[-1] + STEP / 2))
+    corner_in = shapely.intersects_xy(poly, cx, cy)
+    inside = corner_in[:-1, :-1] & corner_in[1:, :-1] & corner_in[:-1, 1:] & corner_in[1:, 1:]
+    result = SurfaceMap(float(gx[0]), float(gy[0]), STEP, supported.reshape(shape), free_min, inside)
     with _LOCK:
         _CACHE[key] = result
         while len(_CACHE) > _CACHE_SIZE:
