@@ -12,11 +12,18 @@ from .config import GenerateConfig, _merge, parse_config
 from .errors import ConfigError
 
 # Household classes a Holodeck-style generator (an LLM asked for a typical room) keeps choosing.
+# Canonical names (see assist3d.scene.classes): selection matches an asset when its class or its
+# canonical class is listed, so "bookcase" and "bedside table" assets count as bookshelf and
+# nightstand. Every name matches classes of the built-in procedural library (tests check it).
 HOUSEHOLD_CLASSES = [
-    "bed", "nightstand", "wardrobe", "dresser", "sofa", "armchair", "coffee table", "tv stand", "tv",
-    "dining table", "chair", "desk", "office chair", "bookshelf", "shelf", "cabinet", "table", "lamp",
-    "floor lamp", "table lamp", "plant", "picture", "mirror", "clock", "book", "vase", "cup", "bottle",
-    "monitor", "keyboard", "laptop", "toilet", "sink", "bathtub", "refrigerator", "counter", "stool",
+    # floor
+    "bed", "nightstand", "wardrobe", "dresser", "sofa", "armchair", "coffee table", "end table", "tv stand",
+    "dining table", "chair", "desk", "office chair", "bookshelf", "shelf", "cabinet", "table", "lamp", "plant",
+    "toilet", "sink", "bathtub", "refrigerator", "counter", "stool", "ottoman", "trash can",
+    # wall
+    "tv", "kitchen cabinet", "picture", "mirror", "clock", "curtain", "towel",
+    # on top
+    "book", "vase", "cup", "bowl", "plate", "bottle", "pillow", "monitor", "keyboard", "laptop",
 ]
 
 PRESETS: dict[str, dict] = {
