@@ -27,6 +27,7 @@ AXES: dict[str, np.ndarray] = {
     "+y": np.array([0.0, 1.0, 0.0]), "-y": np.array([0.0, -1.0, 0.0]),
     "+z": np.array([0.0, 0.0, 1.0]), "-z": np.array([0.0, 0.0, -1.0]),
 }
+CLEARANCE_COVER = 0.5  # faces above must cover this fraction of a surface (x-y area) to bound it
 TEXTURE_MAX_PX = 128  # textures are shrunk to this size before sampling (colours are averaged anyway)
 
 
@@ -331,12 +332,14 @@ class _FaceBounds:
                            tri[:, :, 1].min(1), tri[:, :, 1].max(1))
 
 
-def _clearance(polygon, tri: np.ndarray, fb: _FaceBounds, height: float, band: float) -> float | None:
-    """Gap from ``height`` up to the lowest face starting more than ``band`` above it over
-    ``polygon``, or None.
+def _clearance(polygon, tri: np.ndarray, fb: _FaceBounds, height: float, band: float,
+               cover: float = CLEARANCE_COVER) -> float | None:
+    """Free height above a surface at ``height`` with outline ``polygon``, or None.
 
-    A face is over the polygon when its centroid or one of its vertices is strictly inside it
-    (the centroid catches a board above whose corners lie exactly on the polygon's outline).
+    Faces starting more than ``band`` above the surface with their centroid over the polygon are
+    taken from the lowest up; the clearance is where their projected (x-y) area first reaches
+    ``cover`` times the polygon's area: a shelf board above counts, a pillow on a bed or a tap
+    over a basin does not. None when nothing above covers that much.
     """
     import shapely
 
@@ -345,11 +348,19 @@ def _clearance(polygon, tri: np.ndarray, fb: _FaceBounds, height: float, band: f
     if len(above) == 0:
         return None
     t = tri[above][:, :, :2]
-    pts = np.concatenate([t, t.mean(axis=1, keepdims=True)], axis=1).reshape(-1, 2)
-    inside = shapely.contains_xy(polygon, pts[:, 0], pts[:, 1]).reshape(-1, 4).any(1)
+    centroid = t.mean(axis=1)
+    inside = shapely.contains_xy(polygon, centroid[:, 0], centroid[:, 1])
     if not inside.any():
         return None
-    return float(fb.zmin[above][inside].min() - height)
+    above, t = above[inside], t[inside]
+    e1, e2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
+    projected = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    order = np.argsort(fb.zmin[above], kind="stable")
+    covered = np.cumsum(projected[order])
+    k = int(np.searchsorted(covered, cover * polygon.area))
+    if k >= len(covered):
+        return None
+    return float(fb.zmin[above[order[k]]] - height)
 
 
 def _large_patches(faces: np.ndarray, tri: np.ndarray, area: np.ndarray, min_area: float) -> np.ndarray:
@@ -378,20 +389,21 @@ def _large_patches(faces: np.ndarray, tri: np.ndarray, area: np.ndarray, min_are
     return faces[patch_area[labels] >= min_area]
 
 
-def extract_supports(mesh: MeshData, *, min_area: float = 0.01, min_height: float = 0.05,
+def extract_supports(mesh: MeshData, *, min_area: float = 0.01, min_fraction: float = 0.03, min_height: float = 0.05,
                      max_tilt_deg: float = 10.0, height_tol: float = 0.01, min_clearance: float = 0.05,
                      max_surfaces: int = 8, simplify: float = 0.005,
                      max_union_faces: int = 20000) -> tuple[SupportSurface, ...]:
     """Horizontal upward surfaces of a canonical mesh that objects can rest on.
 
     Up-facing faces (normal within ``max_tilt_deg`` of +z) are clustered by height (a new cluster
-    starts where sorted heights jump by more than ``height_tol``); clusters with at least
-    ``min_area`` m^2 and at least ``min_height`` above the base become surfaces. Each cluster's
-    triangles are unioned (shapely) into polygons; every polygon part with ``min_area`` becomes a
-    :class:`SupportSurface` (exterior ring, simplified by ``simplify`` metres, counter-clockwise).
-    ``clearance`` is the gap to the lowest face that lies entirely above the surface with a vertex
-    over its polygon (``None`` if nothing is above); surfaces with less than ``min_clearance`` are
-    dropped (enclosed or covered). At most ``max_surfaces``, largest first, returned by height.
+    starts where sorted heights jump by more than ``height_tol``); clusters with enough area (at
+    least ``min_area`` m^2 and ``min_fraction`` of the footprint's bounding box) and at least
+    ``min_height`` above the base become surfaces. Each cluster's triangles are unioned (shapely)
+    into polygons; every polygon part with enough area becomes a :class:`SupportSurface`
+    (exterior ring, simplified by ``simplify`` metres, counter-clockwise). ``clearance`` is the
+    free height above (see :func:`_clearance`: the height where faces above cover half the
+    surface; ``None`` if they never do); surfaces with less than ``min_clearance`` are dropped
+    (enclosed or covered). At most ``max_surfaces``, largest first, returned by height.
 
     Cost is bounded: connected patches of a cluster smaller than ``min_area`` (leaves of a plant)
     are dropped before the polygon union, only the ``2 * max_surfaces`` largest clusters are
@@ -403,6 +415,8 @@ def extract_supports(mesh: MeshData, *, min_area: float = 0.01, min_height: floa
     f = mesh.faces.astype(np.int64)
     if len(f) == 0:
         return ()
+    ext = v.max(0) - v.min(0)
+    min_area = max(min_area, min_fraction * float(ext[0] * ext[1]))
     tri = v[f]  # (F, 3, 3)
     cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     norm = np.linalg.norm(cross, axis=1)
