@@ -23,6 +23,8 @@ keeps only some shape clusters, ``allowed_classes`` and ``max_classes`` restrict
 from __future__ import annotations
 
 import logging
+import threading
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -103,6 +105,41 @@ class _Pool:
         rec = pick[int(rng.integers(len(pick)))]
         used.add(rec.id)
         return rec
+
+
+class _PoolCache:
+    """Filtered pools and support-fit sub-pools of one catalog, reused across scenes.
+
+    Keyed weakly by the catalog and reset when its record tuple changes (an import added assets)."""
+
+    def __init__(self) -> None:
+        self._by_catalog: "weakref.WeakKeyDictionary[Catalog, tuple[tuple, dict]]" = weakref.WeakKeyDictionary()
+        self._lock = threading.Lock()
+
+    def get(self, catalog: Catalog, key: tuple, build):
+        records = catalog.records
+        with self._lock:
+            entry = self._by_catalog.get(catalog)
+            if entry is None or entry[0] is not records:
+                entry = (records, {})
+                self._by_catalog[catalog] = entry
+            table = entry[1]
+            if key in table:
+                return table[key]
+        value = build()
+        with self._lock:
+            if len(table) > 20000:
+                table.clear()
+            table[key] = value
+        return value
+
+
+_CACHE = _PoolCache()
+
+
+def _filter_key(cfg: SelectionConfig) -> tuple:
+    return (tuple(cfg.allowed_classes) if cfg.allowed_classes is not None else None, cfg.max_classes,
+            tuple(cfg.clusters) if cfg.clusters is not None else None, cfg.class_pool_seed)
 
 
 def is_complementary(scene_index: int, fraction: float) -> bool:
@@ -215,7 +252,9 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
     complementary = is_complementary(scene_index, cfg.complementary_fraction)
     classes: ClassList | None = resolve_class_list(cfg.real_classes) if complementary else None
     stats = {"complementary": complementary, "draws": 0, "real_draws": 0, "partner_draws": 0}
-    pools = {g: _Pool(_filter(catalog.group(g), cfg, catalog)) for g in ("floor", "wall", "obj")}
+    fkey = _filter_key(cfg)
+    pools = {g: _CACHE.get(catalog, ("pool", fkey, g), lambda g=g: _Pool(_filter(catalog.group(g), cfg, catalog)))
+             for g in ("floor", "wall", "obj")}
     if cfg.floor_count > 0 and not pools["floor"]:
         raise ConfigError(f"{catalog.root}: no floor asset is left to select from after the selection filters "
                           f"(allowed_classes={cfg.allowed_classes}, clusters={cfg.clusters}, "
@@ -228,18 +267,23 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
     real_classes = ({c for pool in pools.values() for c in pool.classes if classes.match(c) is not None}
                     if classes is not None else set())
 
-    def real_of(pool: _Pool, g: str) -> _Pool | None:
+    def real_of(pool: _Pool, g: str, key: tuple) -> _Pool | None:
         if classes is None:
             return None
-        real = _Pool(tuple(r for r in pool.records if r.class_name in real_classes))
-        if pool and not real and g in ("floor", "wall", "obj"):
-            log.warning("selection: no %s asset matches the %s classes; complementary draws use the whole pool",
-                        g, classes.name)
-        return real
 
-    drawers = {g: _Drawer(pool, real_of(pool, g), cfg, complementary, partners[g], used, stats)
+        def build() -> _Pool:
+            real = _Pool(tuple(r for r in pool.records if r.class_name in real_classes))
+            if pool and not real and g != "fit":
+                log.warning("selection: no %s asset matches the %s classes; complementary draws use the whole "
+                            "pool", g, classes.name)
+            return real
+
+        return _CACHE.get(catalog, ("real", classes.name, classes.classes) + key, build)
+
+    drawers = {g: _Drawer(pool, real_of(pool, g, ("pool", fkey, g)), cfg, complementary, partners[g], used, stats)
                for g, pool in pools.items()}
-    obj_sizes = np.array([r.size for r in pools["obj"].records], dtype=np.float64).reshape(-1, 3)
+    obj_sizes = _CACHE.get(catalog, ("sizes", fkey), lambda: np.array(
+        [r.size for r in pools["obj"].records], dtype=np.float64).reshape(-1, 3))
     fit_drawers: dict[str, _Drawer | None] = {}
     warned: set[str] = set()
 
@@ -259,10 +303,14 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
         if not cfg.on_top_fit:
             return tuple(group_draw("obj", cfg.on_top_count))
         if parent.id not in fit_drawers:
-            mask = fits_support_mask(parent, obj_sizes)
-            sub = _Pool(tuple(r for r, m in zip(pools["obj"].records, mask) if m))
-            fit_drawers[parent.id] = (_Drawer(sub, real_of(sub, "fit"), cfg, complementary, partners["obj"], used,
-                                              stats) if sub else None)
+            def build_fit(parent: AssetRecord = parent) -> _Pool:
+                mask = fits_support_mask(parent, obj_sizes)
+                return _Pool(tuple(r for r, m in zip(pools["obj"].records, mask) if m))
+
+            sub = _CACHE.get(catalog, ("fit", fkey, parent.id, parent.supports), build_fit)
+            real_sub = real_of(sub, "fit", ("fit", fkey, parent.id, parent.supports))
+            fit_drawers[parent.id] = (_Drawer(sub, real_sub, cfg, complementary, partners["obj"], used, stats)
+                                      if sub else None)
         drawer = fit_drawers[parent.id]
         if drawer is None:
             stats["no_fitting_on_top"] += 1
