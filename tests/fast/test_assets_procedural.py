@@ -153,6 +153,15 @@ def test_household_preset_classes_exist_in_the_library():
     assert set(HOUSEHOLD_CLASSES) <= produced, sorted(set(HOUSEHOLD_CLASSES) - produced)
 
 
+def test_big_assets_of_floor_obj_families_stay_on_the_floor():
+    from assist3d.assets.procedural import asset_groups
+
+    assert asset_groups(("obj", "floor"), (0.3, 0.2, 0.25)) == ("obj", "floor")
+    assert asset_groups(("obj", "floor"), (0.3, 0.2, 0.9)) == ("floor",)
+    assert asset_groups(("floor", "obj"), (0.8, 0.3, 0.3)) == ("floor",)
+    assert asset_groups(("obj",), (0.8, 0.8, 0.9)) == ("obj",)  # single-group families keep theirs
+
+
 def test_assets_are_deterministic_and_independent_of_count():
     rec_a, mesh_a = build_asset(5, 130)
     rec_b, mesh_b = build_asset(5, 130)
@@ -216,7 +225,8 @@ def test_library_of_200_covers_every_family_and_group(tmp_path):
         fam, idx = r.id.removeprefix("proc:").split("/")
         assert r.family == fam == family_of(0, int(idx)) and len(idx) == 6
         assert r.source == SOURCE and r.license == LICENSE and r.attribution == ATTRIBUTION
-        assert r.groups == FAMILIES[fam].groups
+        assert r.groups and set(r.groups) <= set(FAMILIES[fam].groups)
+        assert r.groups == FAMILIES[fam].groups or ("obj" not in r.groups and max(r.size) > 0.5)
         mesh = cat.load_mesh(r)
         assert r.triangles == len(mesh.faces)
         np.testing.assert_allclose(mesh.vertices.max(0) - mesh.vertices.min(0), r.size, rtol=0.01)
