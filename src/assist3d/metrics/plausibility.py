@@ -9,9 +9,10 @@ component                 weight  an instance passes when ...
 ========================  ======  ===========================================================
 collision_free            0.30    its box overlaps no other box (except its support/children)
                                   by more than 5 % of the smaller box's volume
-supported                 0.25    floor objects stand on the floor, on-top objects on one of
-                                  their support's surfaces (within 2 cm, centre inside the
-                                  surface), wall objects hang on a wall
+supported                 0.25    floor objects stand on the floor (a floor-only asset stacked
+                                  on another object fails), on-top objects on one of their
+                                  support's surfaces (within 2 cm, centre inside the surface),
+                                  wall objects hang on a wall
 inside                    0.15    its footprint lies in the room (1 cm tolerance) and its top
                                   below the ceiling
 on_wall                   0.10    (wall objects) its back is flush with a wall segment
@@ -134,6 +135,13 @@ def score_layout(layout: SceneLayout, catalog: Catalog) -> PlausibilityReport:
             supported[k] = ok or abs(z0[k]) < TOL
             if not ok:
                 problems.append(f"wall instance {inst.id} ({inst.class_name}) is not on a wall")
+            continue
+        if inst.group == "floor" and inst.parent is not None and "obj" not in rec.groups:
+            # furniture stands on the floor: a floor-only asset resting on another object (a
+            # RandomRooms-style pile) is not supported, whatever it rests on
+            supported[k] = False
+            problems.append(f"instance {inst.id} ({inst.class_name}) is a floor object stacked on instance "
+                            f"{inst.parent}")
             continue
         if inst.parent is not None and inst.parent in by_id:
             p = insts[by_id[inst.parent]]
