@@ -75,6 +75,10 @@ class SelectionConfig(_Section):
     on_top_fit: bool = Field(True, description="Draw a support's K on-top assets only among those whose box fits "
                                                "one of its surfaces (footprint, either way round, and clearance); "
                                                "paper: unspecified. False = the whole on-top pool.")
+    min_real_classes: int = Field(3, ge=1, description="A complementary draw is restricted to real classes only when "
+                                                       "the pool holds at least this many of them (else 70 % of, "
+                                                       "say, on-top draws would be ScanNet18's lone 'picture'); "
+                                                       "paper: n/a.")
 
 
 class LayoutConfig(_Section):
@@ -94,7 +98,7 @@ class LayoutConfig(_Section):
     max_on_top_per_support: int = Field(5, ge=0, description="On-top objects placed per support at most.")
     max_branch: int = Field(3, ge=1, description="Positions tried per object when the search backtracks: the best "
                                                  "one, then spread-out alternatives (paper: every valid cell; n/a).")
-    patience: int = Field(60, ge=0, description="Backtracking steps without a layout holding more objects before a "
+    patience: int = Field(20, ge=0, description="Backtracking steps without a layout holding more objects before a "
                                                 "group's search settles for its best (paper: n/a).")
 
 

@@ -81,14 +81,12 @@ class OnTopProblem:
             z = self.sz + surf.height
             if z + h > self.room.height - 0.02:
                 continue
-            for yaw in yaws:
-                lx, ly = smap.centres(w, d, h, float(yaw))
-                if len(lx) == 0:
-                    continue
-                wx = self.sx + c * lx - s * ly
-                wy = self.sy + s * lx + c * ly
-                parts.append(Candidates(wx, wy, np.full_like(wx, np.mod(yaw + self.syaw, 2 * np.pi)),
-                                        np.full_like(wx, z), (w, d, h)))
+            lx, ly, lyaw = smap.centres(w, d, h, yaws)
+            if len(lx) == 0:
+                continue
+            wx = self.sx + c * lx - s * ly
+            wy = self.sy + s * lx + c * ly
+            parts.append(Candidates(wx, wy, np.mod(lyaw + self.syaw, 2 * np.pi), np.full_like(wx, z), (w, d, h)))
         return Candidates.concat(parts, (w, d, h))
 
     def _collide(self, k: int, cands: Candidates, include_moving: bool, include_others: bool = True) -> np.ndarray:

@@ -56,38 +56,57 @@ class SurfaceMap:
     free: np.ndarray
     inside: np.ndarray
 
-    def centres(self, width: float, depth: float, height: float, yaw: float,
-                max_count: int = 600) -> tuple[np.ndarray, np.ndarray]:
-        """Local (x, y) centres (k,) where a footprint at ``yaw`` rests on the mesh inside the
-        polygon, thinned to at most about ``max_count`` on a regular sub-grid."""
-        r = 0.5 * self.step
-        c, s = abs(np.cos(yaw)), abs(np.sin(yaw))
-        ex = int(np.ceil((c * width / 2 + s * depth / 2 + r) / self.step - 1e-9))
-        ey = int(np.ceil((s * width / 2 + c * depth / 2 + r) / self.step - 1e-9))
+    def centres(self, width: float, depth: float, height: float, yaws: np.ndarray,
+                max_count: int = 150) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Local (x, y, yaw) of centres (k,) where the footprint at one of ``yaws`` rests on the
+        mesh inside the polygon, thinned to at most about ``max_count`` per yaw on a regular
+        sub-grid."""
         good = self.inside & (self.free > height + 0.002)
+        out: tuple[list, list, list] = ([], [], [])
         if not good.any():
-            return np.zeros(0), np.zeros(0)
-        area = (2 * ex + 1) * (2 * ey + 1)
-        valid = (_window_sums(good, ex, ey) == area) & self.supported
-        valid &= _window_sums(self.supported, ex, ey) >= MIN_SUPPORTED * area - 1e-9
-        jj, ii = np.nonzero(valid)
-        if len(jj) > max_count:
-            stride = int(np.ceil(np.sqrt(len(jj) / max_count)))
-            keep = (jj % stride == 0) & (ii % stride == 0)
-            if keep.sum() == 0:
-                keep[len(jj) // 2] = True
-            jj, ii = jj[keep], ii[keep]
-        return self.x0 + ii * self.step, self.y0 + jj * self.step
+            return np.zeros(0), np.zeros(0), np.zeros(0)
+        good_sat = _sat(good)
+        sup_sat = _sat(self.supported)
+        r = 0.5 * self.step
+        masks: dict[tuple[int, int], np.ndarray] = {}
+        for yaw in yaws:
+            c, s = abs(np.cos(yaw)), abs(np.sin(yaw))
+            ex = int(np.ceil((c * width / 2 + s * depth / 2 + r) / self.step - 1e-9))
+            ey = int(np.ceil((s * width / 2 + c * depth / 2 + r) / self.step - 1e-9))
+            valid = masks.get((ex, ey))
+            if valid is None:
+                area = (2 * ex + 1) * (2 * ey + 1)
+                valid = (_window_sums(good_sat, ex, ey) == area) & self.supported
+                valid &= _window_sums(sup_sat, ex, ey) >= MIN_SUPPORTED * area - 1e-9
+                masks[(ex, ey)] = valid
+            jj, ii = np.nonzero(valid)
+            if len(jj) > max_count:
+                stride = int(np.ceil(np.sqrt(len(jj) / max_count)))
+                keep = (jj % stride == 0) & (ii % stride == 0)
+                if keep.sum() == 0:
+                    keep[len(jj) // 2] = True
+                jj, ii = jj[keep], ii[keep]
+            out[0].append(self.x0 + ii * self.step)
+            out[1].append(self.y0 + jj * self.step)
+            out[2].append(np.full(len(jj), float(yaw)))
+        return np.concatenate(out[0]), np.concatenate(out[1]), np.concatenate(out[2])
 
 
-def _window_sums(mask: np.ndarray, ex: int, ey: int) -> np.ndarray:
-    """(ny, nx) number of True cells of ``mask`` in the (2 ey + 1) x (2 ex + 1) window around each
-    cell (cells beyond the map count as False), from one summed-area table."""
-    padded = np.pad(mask, ((ey, ey), (ex, ex)), constant_values=False)
-    sat = np.zeros((padded.shape[0] + 1, padded.shape[1] + 1), dtype=np.int32)
-    np.cumsum(np.cumsum(padded, 0, dtype=np.int32), 1, out=sat[1:, 1:])
-    a, b = 2 * ey + 1, 2 * ex + 1
-    return sat[a:, b:] - sat[:-a, b:] - sat[a:, :-b] + sat[:-a, :-b]
+def _sat(mask: np.ndarray) -> np.ndarray:
+    sat = np.zeros((mask.shape[0] + 1, mask.shape[1] + 1), dtype=np.int32)
+    np.cumsum(np.cumsum(mask, 0, dtype=np.int32), 1, out=sat[1:, 1:])
+    return sat
+
+
+def _window_sums(sat: np.ndarray, ex: int, ey: int) -> np.ndarray:
+    """(ny, nx) number of True cells in the (2 ey + 1) x (2 ex + 1) window around each cell, from
+    the summed-area table ``sat`` (ny + 1, nx + 1) of the mask (cells beyond it count as False)."""
+    ny, nx = sat.shape[0] - 1, sat.shape[1] - 1
+    i0 = np.clip(np.arange(nx) - ex, 0, nx)
+    i1 = np.clip(np.arange(nx) + ex + 1, 0, nx)
+    j0 = np.clip(np.arange(ny) - ey, 0, ny)[:, None]
+    j1 = np.clip(np.arange(ny) + ey + 1, 0, ny)[:, None]
+    return sat[j1, i1] - sat[j0, i1] - sat[j1, i0] + sat[j0, i0]
 
 
 def _vertical_hits(tri: np.ndarray, gx: np.ndarray, gy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
