@@ -85,6 +85,13 @@ def test_complementary_alternation_and_real_class_rate(tmp_path):
     expected = p + (1 - p) * n_real / len(FLOOR)
     assert abs(rate - expected) < 0.03
     assert abs(comp.stats["real_draws"] / comp.stats["draws"] - p) < 0.03
+    # the wall pool holds one ScanNet18 class only (picture): below min_real_classes, draws stay uniform
+    walls = _sel(cat, scene_index=1, floor_count=0, wall_count=3000, on_top_count=0, real_class_prob=p)
+    assert walls.stats["real_draws"] == 0
+    assert abs(np.mean([r.class_name == "picture" for r in walls.wall]) - 1 / 3) < 0.03
+    walls = _sel(cat, scene_index=1, floor_count=0, wall_count=3000, on_top_count=0, real_class_prob=p,
+                 min_real_classes=1)
+    assert abs(np.mean([r.class_name == "picture" for r in walls.wall]) - (p + (1 - p) / 3)) < 0.03
     plain = _sel(cat, scene_index=0, floor_count=4000, wall_count=0, real_class_prob=p)
     assert abs(np.mean([real.match(r.class_name) is not None for r in plain.floor]) - n_real / len(FLOOR)) < 0.03
 

@@ -5,7 +5,9 @@ selected object that has a support surface. Two strategies alternate between sce
 
 * **random**: every draw is uniform over the group's pool;
 * **complementary**: each draw is restricted, with probability p (``real_class_prob``), to assets
-  whose class matches the target real dataset's class list (``real_classes``).
+  whose class matches the target real dataset's class list (``real_classes``), provided the pool
+  holds at least ``min_real_classes`` such classes (else the restriction would turn most draws of,
+  e.g., the on-top pool into copies of ScanNet18's only small class, "picture").
 
 "Uniform" is, by default, uniform over classes and then over the assets of the drawn class
 (``sampling: class``), so a class with a hundred near-identical models does not crowd out the rest;
@@ -138,7 +140,7 @@ _CACHE = _PoolCache()
 
 
 def _filter_key(cfg: SelectionConfig) -> tuple:
-    return (tuple(cfg.allowed_classes) if cfg.allowed_classes is not None else None, cfg.max_classes,
+    return (cfg.min_real_classes, tuple(cfg.allowed_classes) if cfg.allowed_classes is not None else None, cfg.max_classes,
             tuple(cfg.clusters) if cfg.clusters is not None else None, cfg.class_pool_seed)
 
 
@@ -273,9 +275,12 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
 
         def build() -> _Pool:
             real = _Pool(tuple(r for r in pool.records if r.class_name in real_classes))
-            if pool and not real and g != "fit":
-                log.warning("selection: no %s asset matches the %s classes; complementary draws use the whole "
-                            "pool", g, classes.name)
+            if pool and len(real.classes) < cfg.min_real_classes:
+                if g != "fit":
+                    log.info("selection: only %d %s class(es) match the %s classes (< min_real_classes = %d); "
+                             "complementary draws of this group use the whole pool", len(real.classes), g,
+                             classes.name, cfg.min_real_classes)
+                return _Pool(())
             return real
 
         return _CACHE.get(catalog, ("real", classes.name, classes.classes) + key, build)
