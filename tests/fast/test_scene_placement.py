@@ -235,3 +235,12 @@ def test_random_baseline_stacks_where_objects_land(catalog):
             assert abs(z - tops[inst.parent]) < 1e-9
         tops[inst.id] = z + size[2]
     assert any(i.parent is not None for i in res.instances), "a 1.2 m room must make objects stack"
+
+
+def test_degenerate_room_is_a_clear_placement_error(catalog):
+    from assist3d.contracts import Room
+
+    room = Room(((0.0, 0.0), (4.0, 0.0), (4.0, 3.0), (0.0, 3.0), (4.0, 0.0)), 2.6)  # self-crossing
+    req = PlanRequest("floor", (catalog.get("box00"),), room)
+    with pytest.raises(PlacementError, match="not a simple polygon"):
+        place_group(req, plan(req), catalog, cfg=LayoutConfig(), rng=np.random.default_rng(0), next_id=1)

@@ -16,6 +16,7 @@ import numpy as np
 import shapely
 
 from ..contracts import PlacedInstance, Room
+from ..errors import PlacementError
 
 __all__ = [
     "pose_matrix", "pose_xyz_yaw", "transform_points", "rotated_half_extents", "rect_corners",
@@ -95,9 +96,10 @@ def box_gap(ax: np.ndarray, ay: np.ndarray, ahx: np.ndarray, ahy: np.ndarray,
 
 def room_polygon(room: Room) -> shapely.Polygon:
     """The room's floor polygon as a valid, counter-clockwise shapely polygon."""
-    poly = shapely.Polygon(room.polygon)
+    poly = shapely.Polygon(room.polygon) if len(room.polygon) >= 3 else shapely.Polygon()
     if not poly.is_valid or poly.area <= 0:
-        raise ValueError(f"room polygon is not a simple polygon with positive area: {room.polygon}")
+        raise PlacementError(f"room polygon {room.polygon} is not a simple polygon with positive area; "
+                             f"give at least three vertices, counter-clockwise, without self-crossings")
     return shapely.orient_polygons(poly)
 
 

@@ -28,6 +28,16 @@ from .surface import surface_map
 EPS = 1e-6
 
 
+def _clean_polygon(points: tuple[tuple[float, float], ...]) -> shapely.Polygon:
+    """A valid polygon from a record's outline (a self-crossing outline keeps its largest piece)."""
+    poly = shapely.Polygon(points)
+    if not poly.is_valid:
+        fixed = poly.buffer(0)
+        parts = list(getattr(fixed, "geoms", [fixed]))
+        poly = max(parts, key=lambda g: g.area) if parts else shapely.Polygon()
+    return shapely.orient_polygons(poly) if poly.area > 0 else poly
+
+
 class OnTopProblem:
     """One on-top group as a :class:`~assist3d.scene.placement.search.SearchProblem`."""
 
@@ -41,8 +51,10 @@ class OnTopProblem:
         self.support = support
         self.sx, self.sy, self.sz, self.syaw = pose_xyz_yaw(support.pose)
         self.surfaces = [s for s in surfaces if len(s.polygon) >= 3]
-        self.polys = [shapely.Polygon(s.polygon) for s in self.surfaces]
-        self.polys = [shapely.orient_polygons(p if p.is_valid else p.buffer(0)) for p in self.polys]
+        self.polys = [_clean_polygon(s.polygon) for s in self.surfaces]
+        keep = [i for i, p in enumerate(self.polys) if p.area > 0]
+        self.surfaces = [self.surfaces[i] for i in keep]
+        self.polys = [self.polys[i] for i in keep]
         sb = world_bounds(sizes[support.asset], support.pose)
         others = InstanceBoxes.from_instances([p for p in placed if p.id != support.id], sizes)
         if len(others):
