@@ -44,6 +44,12 @@ def test_scene_folder_loads_like_pointcept_and_marker_lists_every_file(tmp_path)
     assert SceneLayout.from_json(json.loads((d / "layout.json").read_text())).seed == 5
     assert load_scene_arrays(d)["segment"].dtype == np.int32
     assert not list(d.glob(".*tmp"))  # no temporary files left behind
+    import os
+    import stat
+
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE((d / "coord.npy").stat().st_mode) == 0o666 & ~umask  # not mkstemp's 0600
 
 
 def test_incomplete_or_corrupted_scene_is_not_complete(tmp_path):

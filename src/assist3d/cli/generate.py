@@ -201,7 +201,9 @@ def register(app: typer.Typer) -> None:
             t.add_row(k, f"{v:.3f}")
         t.add_row("[bold]per scene (median)", f"[bold]{res['seconds_per_scene']['median']:.3f}")
         t.add_row("per scene (max)", f"{res['seconds_per_scene']['max']:.3f}")
-        t.add_row("CPU s / scene, all threads (median)", f"{res['cpu_seconds_per_scene']:.3f}")
+        t.add_row("CPU s / scene before writing, all threads (median)", f"{res['cpu_seconds_per_scene']:.3f}")
+        for k, v in res["cpu_stages"].items():
+            t.add_row(f"  CPU s: {k}", f"{v:.3f}")
         t.add_row("peak memory, MB", f"{res['peak_memory_mb']:.0f}")
         t.add_row("points / scene (median)", f"{res['points_per_scene']:,.0f}")
         t.add_row("instances / scene (median)", f"{res['instances_per_scene']:.0f}")
