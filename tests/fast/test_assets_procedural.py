@@ -254,6 +254,17 @@ def test_build_library_is_idempotent_and_keeps_other_sources(tmp_path):
     assert "meshes:x/one" in smaller
 
 
+def test_concurrent_builds_of_one_library_agree(tmp_path):
+    """Parallel scene workers may all build the missing default library at once: harmless."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(max_workers=3) as pool:
+        list(pool.map(lambda _: build_library(tmp_path / "lib", count=25, seed=9), range(3)))
+    build_library(tmp_path / "ref", count=25, seed=9)
+    assert _hashes(tmp_path / "lib") == _hashes(tmp_path / "ref")
+    assert len(list((tmp_path / "lib" / "meshes").iterdir())) == 25
+
+
 def test_smaller_rebuild_removes_orphan_meshes(tmp_path):
     root = tmp_path / "lib"
     build_library(root, count=20, seed=2)
