@@ -5,8 +5,9 @@
 * **interpenetration**: for each pair of instances whose mesh bounds overlap by more than
   ``tol`` in x, y and z, points of one mesh (its vertices plus seeded surface samples, those
   inside the other's bounds) are tested against the other mesh. A point is *inside* when rays
-  cast along the six axis directions cross the other mesh an odd number of times in at least
-  four of them (a majority vote that tolerates the holes of non-watertight catalog meshes and
+  cast along the six axis directions cross the other mesh an odd number of times (crossings
+  less than 1 mm apart counted once: catalog meshes often hold faces twice) in at least four of
+  them (a majority vote that tolerates the holes of non-watertight catalog meshes and
   does not mistake the open cavity of a shelf or the space under a table for its material), and
   it counts only if its depth (distance to the nearest crossing along 14 directions) exceeds
   ``tol``;
@@ -32,6 +33,7 @@ from ..assets.catalog import Catalog
 from ..contracts import MeshData, PlacedInstance, SceneLayout
 from .assemble import instance_meshes
 from .geometry import pose_xyz_yaw, room_polygon, wall_segments
+from .placement.surface import distinct_counts
 
 log = logging.getLogger(__name__)
 
@@ -92,9 +94,10 @@ def _crossings(tm, origins: np.ndarray, direction: np.ndarray) -> tuple[np.ndarr
     dirs = np.tile(direction, (n, 1))
     locs, idx, _ = tm.ray.intersects_location(origins, dirs, multiple_hits=True)
     nearest = np.full(n, np.inf)
+    dist = np.linalg.norm(locs - origins[idx], axis=1) if len(idx) else np.zeros(0)
     if len(idx):
-        np.minimum.at(nearest, idx, np.linalg.norm(locs - origins[idx], axis=1))
-    return np.bincount(idx, minlength=n), nearest
+        np.minimum.at(nearest, idx, dist)
+    return distinct_counts(np.asarray(idx, dtype=np.int64), dist, n), nearest
 
 
 def _inside_depth(points: np.ndarray, other: _Mesh, tol: float, seed: int) -> float:

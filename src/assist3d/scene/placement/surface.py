@@ -7,8 +7,8 @@ sampled on a 2 cm grid in the asset frame with two vertical rays per cell, compu
 rasterising the mesh's triangles onto the grid (no ray-tracing library needed): straight down
 from 5 cm above the surface (the first crossing must be within :data:`SUPPORT_TOL` of ``h``:
 the cell is *supported*) and straight up from the top found (the distance to the next crossing
-is the *free height*; 0 when the ray crosses the mesh an odd number of times, i.e. the cell is
-inside the model's material; each cell keeps the smallest free height of its 3 x 3
+is the *free height*; 0 when the ray crosses the mesh an odd number of times, crossings less
+than 1 mm apart counted once, i.e. the cell is inside the model's material or a closed cavity; each cell keeps the smallest free height of its 3 x 3
 neighbourhood so thin legs and rails between samples count).
 
 For an object of footprint w x d and height z at a yaw, the valid centres are found for the whole
@@ -109,6 +109,18 @@ def _window_sums(sat: np.ndarray, ex: int, ey: int) -> np.ndarray:
     return sat[j1, i1] - sat[j0, i1] - sat[j1, i0] + sat[j0, i0]
 
 
+def distinct_counts(ray: np.ndarray, t: np.ndarray, n: int, merge: float = 1e-3) -> np.ndarray:
+    """(n,) crossings per ray, counting crossings closer than ``merge`` along a ray once (catalog
+    meshes often hold each face twice, one per side, which would flip every parity)."""
+    if len(ray) == 0:
+        return np.zeros(n, dtype=np.int64)
+    order = np.lexsort((t, ray))
+    r, tt = ray[order], t[order]
+    new = np.ones(len(r), dtype=bool)
+    new[1:] = (r[1:] != r[:-1]) | (tt[1:] - tt[:-1] > merge)
+    return np.bincount(r[new], minlength=n)
+
+
 def _vertical_hits(tri: np.ndarray, gx: np.ndarray, gy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Where vertical lines through the grid points (gx (nx,), gy (ny,)) cross triangles (t, 3, 3).
 
@@ -181,7 +193,7 @@ def surface_map(key: tuple, mesh: MeshData, surf: SupportSurface, poly: shapely.
     np.minimum.at(free, cell[above], z[above] - h)
     # An odd number of crossings above means the point is inside the mesh's material (a
     # "surface" found between two parts of a closed model): nothing can stand there.
-    free[np.bincount(cell[above], minlength=n) % 2 == 1] = 0.0
+    free[distinct_counts(cell[above], z[above], n) % 2 == 1] = 0.0
     # Thin parts (legs, ropes, rails) can slip between samples: each cell keeps the smallest free
     # height of its 3 x 3 neighbourhood.
     free_min = ndimage.minimum_filter(free.reshape(shape), size=3, mode="nearest")
