@@ -32,7 +32,7 @@ from ...contracts import AssetRecord, MeshData, SupportSurface
 from ...errors import AssetError
 from ..catalog import Catalog
 from . import (abstract, appliances, household, seating, small_extra, small_home, small_misc,  # noqa: F401
-               storage, tables, wall)  # importing a module registers its families
+               storage, tables, wall, wall_extra)  # importing a module registers its families
 from ._build import Shape
 from ._registry import FAMILIES, Family
 
