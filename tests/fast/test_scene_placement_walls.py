@@ -134,3 +134,32 @@ def test_on_top_of_a_support_without_surfaces_drops_everything(catalog):
     req = PlanRequest("on:5", (catalog.get("cup0"),), room, (sofa,), sofa)
     res = place_group(req, plan(req), catalog, cfg=LayoutConfig(), rng=np.random.default_rng(0), next_id=6)
     assert res.instances == () and "no support surface" in res.dropped[0].reason
+
+
+def test_surface_inside_a_closed_model_or_overhung_carries_nothing(tmp_path):
+    from dataclasses import replace
+
+    from assist3d.contracts import MeshData, SupportSurface
+
+    from test_scene_placement_kit import box_mesh, merge
+
+    # A closed 1 x 1 x 1 m block whose record claims a surface at 0.5 m (inside the material),
+    # with every face duplicated back to back as catalog meshes often are; and a table whose
+    # record claims a surface 3 cm above its real top.
+    block, block_mesh = box_asset("block", 1.0, 1.0, 1.0)
+    inner = box_mesh((-0.45, -0.45, 0.5), (0.45, 0.45, 0.5))  # a flat face inside the block at 0.5 m
+    m = merge(block_mesh, MeshData(inner.vertices, inner.faces[2:4], inner.face_colors[2:4]))
+    doubled = MeshData(m.vertices, np.concatenate([m.faces, m.faces[:, ::-1]]).astype(np.int32),
+                       np.concatenate([m.face_colors, m.face_colors]))
+    square = ((-0.4, -0.4), (0.4, -0.4), (0.4, 0.4), (-0.4, 0.4))
+    block = replace(block, supports=(SupportSurface(0.5, square),))
+    table, table_mesh = table_asset("table")
+    high = replace(table, id="hightable", supports=(SupportSurface(0.78, table.supports[0].polygon),))
+    cat = make_catalog(tmp_path, [(block, doubled), (high, table_mesh), (table, table_mesh),
+                                  box_asset("cup", 0.1, 0.1, 0.1, groups=("obj",), cls="cup")])
+    room = rect_room(4.0, 3.0)
+    for asset, expect in (("block", 0), ("hightable", 0), ("table", 3)):
+        sup = PlacedInstance(5, asset, "x", "floor", pose_matrix(2.0, 1.5, 0.0, 0.0))
+        req = PlanRequest("on:5", (cat.get("cup"),) * 3, room, (sup,), sup)
+        res = place_group(req, plan(req), cat, cfg=LayoutConfig(), rng=np.random.default_rng(0), next_id=6)
+        assert len(res.instances) == expect, asset
