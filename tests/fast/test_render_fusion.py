@@ -166,3 +166,15 @@ def test_one_per_voxel_pickers_keep_exactly_one_row_per_key_and_vary_with_salt()
     keys = np.zeros(64, np.int64)
     chosen = {int(pick_one_per_voxel(keys, s)[0]) for s in range(1, 200)}
     assert len(chosen) > 20
+
+
+def test_empty_room_gives_an_all_background_cloud():
+    room = Room(((0.0, 0.0), (3.0, 0.0), (3.0, 3.0), (0.0, 3.0)), 2.5, ceiling=False)
+    mesh = combine_parts(shell_parts(room))
+    res = render_point_cloud(mesh, room, RenderConfig(**SMALL), rng=np.random.default_rng(0))
+    assert len(res.sample) > 1000 and len(res.pixel_counts) == 0
+    assert np.all(res.sample.instance == -1) and np.all(res.sample.segment == -1)
+    # the floor is seen, and every point lies on the floor or a wall
+    c = res.sample.coord
+    on_surface = (np.abs(c[:, 2]) < 1e-4) | (np.min(np.abs(np.c_[c[:, 0], c[:, 0] - 3, c[:, 1], c[:, 1] - 3]), axis=1) < 1e-4)
+    assert on_surface.all() and np.any(np.abs(c[:, 2]) < 1e-4)

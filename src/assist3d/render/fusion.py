@@ -60,11 +60,11 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
     """
     if not cameras:
         return FusedHits(np.zeros((0, 3), np.float32), np.zeros(0, np.int32), np.zeros(0, np.int32),
-                         np.zeros(1, np.int64), 0, 0.0, 0.0)
+                         np.zeros(0, np.int64), 0, 0.0, 0.0)
     c0 = cameras[0]
     cam_dirs = pixel_directions(c0.width, c0.height, c0.fx, c0.fy, c0.cx, c0.cy).astype(np.float32)
     grid = scene_grid(scene, cfg.voxel_size)
-    n_ids = int(max(0, scene.face_instance.max(initial=-1))) + 2  # slot 0 = background
+    n_ids = int(scene.face_instance.max(initial=-1)) + 2  # slot 0 = background, slot i + 1 = instance i
     inst_shift = (scene.face_instance + 1).astype(np.int32)  # background -> 0
     salts = rng.integers(1, 2**62, size=len(cameras) + 1)
     sensor_seeds = rng.integers(0, 2**63, size=len(cameras))
@@ -111,7 +111,7 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
     raw = int(sum(p[4] for p in parts))
     del parts
     keep = pick_one_per_voxel(keys, int(salts[-1]))
-    out = FusedHits(coord[keep], face[keep], view[keep], counts[1:] if len(counts) > 1 else counts[:0],
+    out = FusedHits(coord[keep], face[keep], view[keep], counts[1:],
                     raw, t1 - t0, time.perf_counter() - t1)
     log.debug("fusion: %d raw hits -> %d per-view picks -> %d points", raw, len(keys), len(keep))
     return out
