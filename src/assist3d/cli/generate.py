@@ -6,7 +6,6 @@ import json
 import logging
 import statistics
 import sys
-import time
 from pathlib import Path
 from typing import List, Optional
 
