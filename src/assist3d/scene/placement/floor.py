@@ -34,8 +34,16 @@ def _sums(sat: np.ndarray, i0: np.ndarray, i1: np.ndarray, j0: np.ndarray, j1: n
     """(rows, cols) sums of the summed-area table over the rectangles [j0, j1) x [i0, i1) formed
     by every row range (j) with every column range (i); out-of-grid indices are clipped."""
     nyp, nxp = sat.shape
-    i0, i1 = np.clip(i0, 0, nxp - 1), np.clip(i1, 0, nxp - 1)
-    j0, j1 = np.clip(j0, 0, nyp - 1)[:, None], np.clip(j1, 0, nyp - 1)[:, None]
+    i0, i1 = np.maximum(i0, 0), np.minimum(i1, nxp - 1)
+    j0, j1 = np.maximum(j0, 0)[:, None], np.minimum(j1, nyp - 1)[:, None]
+    return sat[j1, i1] - sat[j0, i1] - sat[j1, i0] + sat[j0, i0]
+
+
+def _rect_sums(sat: np.ndarray, i0: np.ndarray, i1: np.ndarray, j0: np.ndarray, j1: np.ndarray) -> np.ndarray:
+    """(n,) sums of the summed-area table over rectangles [j0, j1) x [i0, i1) (indices clipped)."""
+    nyp, nxp = sat.shape
+    i0, i1 = np.maximum(i0, 0), np.minimum(i1, nxp - 1)
+    j0, j1 = np.maximum(j0, 0), np.minimum(j1, nyp - 1)
     return sat[j1, i1] - sat[j0, i1] - sat[j1, i0] + sat[j0, i0]
 
 
@@ -117,14 +125,11 @@ class FloorGrid:
         """(n,) bool: rectangles lie on the grid and touch no blocked cell of ``sat``'s mask."""
         i0, i1, j0, j1 = self.ranges(cx, cy, ex, ey)
         ok = (i0 >= 0) & (j0 >= 0) & (i1 <= self.nx) & (j1 <= self.ny)
-        i0, i1 = np.clip(i0, 0, self.nx), np.clip(i1, 0, self.nx)
-        j0, j1 = np.clip(j0, 0, self.ny), np.clip(j1, 0, self.ny)
-        total = sat[j1, i1] - sat[j0, i1] - sat[j1, i0] + sat[j0, i0]
-        return ok & (total == 0)
+        return ok & (_rect_sums(sat, i0, i1, j0, j1) == 0)
 
     def dist_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        i = np.clip(np.searchsorted(self.xb, x, "right") - 1, 0, self.nx - 1)
-        j = np.clip(np.searchsorted(self.yb, y, "right") - 1, 0, self.ny - 1)
+        i = np.minimum(np.maximum(np.searchsorted(self.xb, x, "right") - 1, 0), self.nx - 1)
+        j = np.minimum(np.maximum(np.searchsorted(self.yb, y, "right") - 1, 0), self.ny - 1)
         return self.wall_dist[j, i]
 
 
@@ -154,7 +159,7 @@ class FloorProblem:
     # ------------------------------------------------------------ candidates
 
     def _cell_index(self, v: np.ndarray, borders: np.ndarray) -> np.ndarray:
-        return np.clip(np.searchsorted(borders, v, "right") - 1, 0, len(borders) - 2)
+        return np.minimum(np.maximum(np.searchsorted(borders, v, "right") - 1, 0), len(borders) - 2)
 
     def _grid_part(self, w: float, d: float, h: float, yaw: float) -> tuple[Candidates, tuple[np.ndarray, ...]]:
         """Grid candidates at one yaw valid in the empty room, with their footprints' cell ranges.
@@ -210,7 +215,7 @@ class FloorProblem:
         x, y, yaw = np.concatenate(xs), np.concatenate(ys), np.concatenate(yaws)
         ex, ey = rotated_half_extents(w, d, yaw)
         i0, i1, j0, j1 = g.ranges(x, y, ex, ey)
-        ok = g.free(self.static_sat, x, y, ex, ey)
+        ok = (i0 >= 0) & (j0 >= 0) & (i1 <= g.nx) & (j1 <= g.ny) & (_rect_sums(self.static_sat, i0, i1, j0, j1) == 0)
         fc = self.cfg.front_clearance
         if fc > 0:
             fx, fy = np.sin(yaw), -np.cos(yaw)
@@ -258,8 +263,7 @@ class FloorProblem:
         c, (i0, i1, j0, j1) = self._static(k)
         if self._sat is None:
             self._sat = self.grid.sat(self.occ > 0)  # one table per search state, shared by all items
-        sat = self._sat
-        ok = (sat[j1, i1] - sat[j0, i1] - sat[j1, i0] + sat[j0, i0]) == 0
+        ok = self._sat[j1, i1] - self._sat[j0, i1] - self._sat[j1, i0] + self._sat[j0, i0] == 0
         if not ok.any():
             return [], f"no free floor position for its {w:.2f} x {d:.2f} m footprint"
         c = c.take(np.flatnonzero(ok))
