@@ -195,6 +195,8 @@ def generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int
     if workers < 1:
         raise ConfigError(f"--workers must be >= 1, got {workers}")
     out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out {out}: exists and is not a folder")
     indices = sorted(set(int(i) for i in indices))
     if any(i < 0 for i in indices):
         raise ConfigError("scene indices must be >= 0")
