@@ -89,8 +89,12 @@ def test_export_glb_round_trips_node_names(catalog, tmp_path):
     transform = scene.graph[f"instance_3"][0]
     verts = trimesh.transform_points(scene.geometry[geom].vertices, transform)
     assert abs(verts[:, 2].min() - 0.75) < 1e-5 and abs(verts[:, 0].mean() - 2.0) < 0.06
-    colors = scene.geometry[scene.graph["instance_1"][1]].visual.vertex_colors
+    table = scene.geometry[scene.graph["instance_1"][1]]
+    colors = table.visual.vertex_colors
     assert {tuple(c[:3]) for c in colors} == {(150, 100, 60), (120, 80, 50)}
+    per_face = colors[table.faces][:, :, :3]
+    assert (per_face == per_face[:, :1]).all(), "a face's corners must share its colour"
+    assert len(table.vertices) < 3 * len(table.faces), "vertices of same-coloured faces stay shared"
 
 
 def test_check_layout_passes_a_good_layout(catalog):

@@ -75,33 +75,36 @@ def assemble_scene(layout: SceneLayout, catalog: Catalog, classes: Sequence[str]
     )
 
 
-def _unshared(mesh: MeshData):
-    """A trimesh with three own vertices per face carrying the face's colour, so per-face colours
-    survive formats that only store vertex colours."""
+def _colored(mesh: MeshData):
+    """A trimesh whose vertex colours reproduce the per-face colours exactly: a vertex is
+    duplicated only where faces of different colours meet, so most vertices stay shared."""
     import trimesh
 
-    f = mesh.faces
-    verts = mesh.vertices[f].reshape(-1, 3)
-    faces = np.arange(len(verts), dtype=np.int64).reshape(-1, 3)
-    rgba = np.concatenate([np.repeat(mesh.face_colors, 3, axis=0), np.full((len(verts), 1), 255, np.uint8)], 1)
-    return trimesh.Trimesh(vertices=verts, faces=faces, vertex_colors=rgba, process=False)
+    f = mesh.faces.astype(np.int64)
+    code = (mesh.face_colors.astype(np.int64) @ np.array([65536, 256, 1], dtype=np.int64))
+    key = f * (1 << 24) + code[:, None]
+    uniq, inverse = np.unique(key.ravel(), return_inverse=True)
+    verts = mesh.vertices[uniq >> 24]
+    rgb = np.stack([(uniq >> 16) & 255, (uniq >> 8) & 255, uniq & 255], 1).astype(np.uint8)
+    rgba = np.concatenate([rgb, np.full((len(uniq), 1), 255, np.uint8)], 1)
+    return trimesh.Trimesh(vertices=verts, faces=inverse.reshape(-1, 3), vertex_colors=rgba, process=False)
 
 
 def export_glb(layout: SceneLayout, catalog: Catalog, path: str | Path) -> None:
     """Write the scene as binary glTF: one mesh node per instance named ``instance_<id>`` and one
     per room surface named ``background_<name>`` (floor, wall_0, ..., ceiling), vertices in the
-    world frame of the poses (node transforms are identity), per-face colours as the colours of
-    unshared vertices. Written atomically."""
+    world frame of the poses (node transforms are identity), per-face colours as vertex colours
+    (a vertex is duplicated where faces of different colours meet). Written atomically."""
     import trimesh
 
     scene = trimesh.Scene()
     for ident, mesh in instance_meshes(layout, catalog):
         name = f"instance_{ident}"
-        scene.add_geometry(_unshared(mesh), node_name=name, geom_name=name)
+        scene.add_geometry(_colored(mesh), node_name=name, geom_name=name)
     for name, mesh in build_shell(layout.room):
         if len(mesh.faces):
             node = f"background_{name}"
-            scene.add_geometry(_unshared(mesh), node_name=node, geom_name=node)
+            scene.add_geometry(_colored(mesh), node_name=node, geom_name=node)
     buf = io.BytesIO()
     scene.export(buf, file_type="glb")
     write_bytes_atomic(path, buf.getvalue())
