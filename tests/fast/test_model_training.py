@@ -178,3 +178,31 @@ def test_dbscan_splits_far_clusters():
     b = rng.normal(5, 0.05, (20, 3))
     lab = dbscan_labels(np.concatenate([a, b, [[20, 20, 20]]]), eps=0.5, min_points=3)
     assert len(set(lab[:30])) == 1 and len(set(lab[30:50])) == 1 and lab[0] != lab[30] and lab[-1] == -1
+
+
+def test_model_bench_reports_times(tmp_path):
+    from assist3d.engine.bench import run_model_bench
+
+    res = run_model_bench(parse_train_config(TINY), points=3000, repeats=1)
+    assert res.points == 3000 and 0 < res.voxels <= 3000
+    assert res.forward_s > 0 and res.forward_backward_s > 0 and res.parameters > 0
+
+
+def test_import_assist3d_does_not_import_torch():
+    import subprocess
+    import sys
+
+    code = "import sys, assist3d, assist3d.cli, assist3d.engine, assist3d.models; print('torch' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+def test_train_cli_requires_data(tmp_path):
+    from typer.testing import CliRunner
+
+    from assist3d.cli import app
+
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("optim: {epochs: 1}\n")
+    res = CliRunner().invoke(app, ["train", "--config", str(cfg), "--out", str(tmp_path / "o")])
+    assert res.exit_code != 0 and "no training data" in str(res.exception)

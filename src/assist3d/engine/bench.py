@@ -57,12 +57,15 @@ def run_model_bench(cfg: TrainConfig, *, points: int = 100_000, backend: str = "
                     repeats: int = 3, seed: int = 0) -> BenchResult:
     dev = resolve_device(device)
     cfg = cfg.model_copy(update={"model": cfg.model.model_copy(update={"backend": backend})})
+    if cfg.threads > 0:
+        torch.set_num_threads(cfg.threads)
     rng = np.random.default_rng(seed)
-    density = 2500.0
-    sample = make_toy_scene("bench", rng=rng, num_objects=12, room_m=6.0, density_per_m2=density)
+    room = 6.0
+    density = 1.3 * points / (room * room + 2 * room * 2.6 + 24.0)  # floor, two walls, ~12 boxes
+    sample = make_toy_scene("bench", rng=rng, num_objects=12, room_m=room, density_per_m2=density)
     while len(sample) < points:
         density *= 1.5 * points / len(sample)
-        sample = make_toy_scene("bench", rng=np.random.default_rng(seed), num_objects=12, room_m=6.0,
+        sample = make_toy_scene("bench", rng=np.random.default_rng(seed), num_objects=12, room_m=room,
                                 density_per_m2=density)
     rows = np.sort(rng.choice(len(sample), points, replace=False))
     vox = voxelize(sample.coord[rows], sample.color[rows], sample.instance[rows], cfg.data.voxel_size)

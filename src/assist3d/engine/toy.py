@@ -85,14 +85,15 @@ def write_pointcept_scene(folder: Path, sample: PointSample) -> None:
     write_text_atomic(folder / "meta.json", json.dumps(meta, indent=1) + "\n")
 
 
-def write_toy_dataset(out: str | Path, num_scenes: int, *, seed: int, num_objects: int = 6,
+def write_toy_dataset(out: str | Path, num_scenes: int, *, seed: int, num_objects: int = 6, room_m: float = 5.0,
                       density_per_m2: float = 2500.0) -> list[Path]:
     """``num_scenes`` toy scenes under ``out/scene_XXXX`` in the Pointcept layout; seeds per (seed, index)."""
     out = Path(out)
     folders = []
     for i in range(num_scenes):
         rng = np.random.default_rng(np.random.SeedSequence([seed, i]))
-        sample = make_toy_scene(f"scene_{i:04d}", rng=rng, num_objects=num_objects, density_per_m2=density_per_m2)
+        sample = make_toy_scene(f"scene_{i:04d}", rng=rng, num_objects=num_objects, room_m=room_m,
+                                density_per_m2=density_per_m2)
         folder = out / sample.scene_id
         write_pointcept_scene(folder, sample)
         folders.append(folder)
