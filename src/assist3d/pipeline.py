@@ -21,7 +21,7 @@ from typing import Callable, Iterable, Iterator
 import numpy as np
 
 from .config import GenerateConfig, config_to_dict, dump_config
-from .errors import ConfigError
+from .errors import AssistError, ConfigError
 from .export import Manifest, read_scene_meta, write_scene
 from .export.writer import make_readable, remove_stale_temps
 from .rng import make_rng, scene_seed
@@ -156,6 +156,7 @@ class DatasetRun:
     generated: list[dict]
     manifest: Manifest
     failed_checks: list[str]
+    errors: list[str]  # scenes that raised an AssistError (not written; a re-run retries them)
 
 
 @contextmanager
@@ -261,20 +262,37 @@ def generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int
             if on_scene:
                 on_scene(meta, False)
 
+        errors: list[str] = []
+
+        def fail(index: int, err: BaseException) -> None:
+            if not isinstance(err, AssistError):
+                raise err
+            log.error("%s failed: %s", scene_name(index), err)  # the run goes on; a re-run retries it
+            errors.append(scene_name(index))
+
         jobs = [SceneJob(i, str(out), verify) for i in todo]
         if gen is not None:
             for job in jobs:
-                done(gen.scene(job))
+                try:
+                    meta = gen.scene(job)
+                except AssistError as e:
+                    fail(job.index, e)
+                    continue
+                done(meta)
         elif jobs:
             ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn")
             with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=ctx, initializer=_init_worker,
                                      initargs=(cfg_dict, threads)) as pool:
-                pending = {pool.submit(_run_job, j) for j in jobs}
+                futures = {pool.submit(_run_job, j): j.index for j in jobs}
+                pending = set(futures)
                 while pending:
                     finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                     for f in finished:
-                        done(f.result())
-        return DatasetRun(out, indices, skipped, generated, manifest, failed)
+                        if f.exception() is not None:
+                            fail(futures[f], f.exception())
+                        else:
+                            done(f.result())
+        return DatasetRun(out, indices, skipped, generated, manifest, failed, errors)
 
 
 def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, out: str | None = None,

@@ -154,11 +154,16 @@ def register(app: typer.Typer) -> None:
         if as_json:
             sys.stdout.write(json.dumps({
                 "out": str(out), "scenes": len(indices), "generated": len(run.generated), "skipped": len(run.skipped),
-                "stages": _stage_means(run.generated), "failed_checks": run.failed_checks}) + "\n")
+                "stages": _stage_means(run.generated), "failed_checks": run.failed_checks,
+                "errors": run.errors}) + "\n")
         else:
             _summary_table(run, Console())
         if run.failed_checks:
             log.error("label check failed for %d scenes: %s", len(run.failed_checks), ", ".join(run.failed_checks))
+        if run.errors:
+            log.error("%d scenes failed (re-run the same command to retry them): %s", len(run.errors),
+                      ", ".join(run.errors))
+        if run.failed_checks or run.errors:
             raise typer.Exit(1)
 
     @app.command()
