@@ -277,3 +277,39 @@ def test_real_reallusion_catalog_imports(tmp_path, sh3d_dir):
         assert r.license == "CC-BY-3.0-US" and r.groups == ("floor",) and r.class_name
     textured = cat.load_mesh(cat.records[0])
     assert len(np.unique(textured.face_colors, axis=0)) > 3  # colours sampled from the textures
+
+
+# ------------------------------------------------------------------------------------ fast OBJ reader
+
+
+def test_fast_obj_reader_forms_polygons_materials_and_fallbacks():
+    from assist3d.assets.objfile import ObjUnsupported, face_colors, parse_mtl, parse_obj
+
+    obj = parse_obj(b"# c\r\nmtllib m.mtl\r\nv 0 0 0\r\nv 1 0 0\r\nv 1 1 0 # note\r\nv 0 1 0\r\nvt 0.1 0.1\r\nvt 0.9 0.9\r\n"
+                    b"usemtl tex\r\nf 1/2 2/2 3/1 4/2\r\nusemtl red\r\nf 1//1 3//1 4//1\r\nf 1/2/1 2/1/1 3\r\n")
+    assert obj.faces.tolist() == [[0, 1, 2], [0, 2, 3], [0, 2, 3], [0, 1, 2]]
+    assert obj.face_material.tolist() == [0, 0, 1, 1] and obj.material_names == ("tex", "red")
+    assert obj.face_uv[0].tolist() == [1, 1, 0] and obj.face_uv[2].tolist() == [-1, -1, -1]
+    assert obj.mtllibs == ("m.mtl",)
+    mats = parse_mtl(b"newmtl tex\nKd 1 1 1\nmap_Kd -s 1 1 1 wood.png\nnewmtl red\nKd 1 0 0\n")
+    assert mats["tex"].texture == "wood.png" and np.allclose(mats["red"].kd, (255, 0, 0))
+    tex = np.zeros((2, 2, 3))
+    tex[:, 1] = (0, 0, 250)  # right half blue, left half black
+    colours = face_colors(obj, mats, lambda name: tex if name == "wood.png" else None)
+    assert colours[2].tolist() == [255, 0, 0] and colours[0].tolist() == [0, 0, 250]  # UV centroid u = 0.63
+    for bad in (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n", b"v 0 0 0\nv 1 0 x\nf 1 2 3\n",
+                b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \\\n 3\n"):
+        with pytest.raises(ObjUnsupported):
+            parse_obj(bad)
+
+
+def test_fast_reader_agrees_with_trimesh_on_real_models(jar_entries):
+    from assist3d.assets.normalize import compact
+    from assist3d.assets.sh3d import _load_arrays
+
+    for key in ("chair", "bookcase", "roundTable"):
+        entry = jar_entries[f"sh3d:DefaultFurnitureCatalog/{key}"]
+        va, fa, ca = compact(*_load_arrays(entry, fast=True))
+        vb, fb, cb = compact(*_load_arrays(entry, fast=False))
+        assert len(fa) == len(fb) and np.allclose(np.ptp(va, 0), np.ptp(vb, 0))
+        assert np.abs(ca.mean(0) - cb.mean(0)).max() < 3

@@ -141,7 +141,7 @@ def _rgb(c: Any) -> np.ndarray | None:
     return np.clip(rgb, 0, 255)
 
 
-def _image_array(image: Any) -> np.ndarray | None:
+def image_array(image: Any) -> np.ndarray | None:
     """A small (h, w, 3) float64 copy of a PIL image, or None."""
     if image is None:
         return None
@@ -162,7 +162,7 @@ def _image_array(image: Any) -> np.ndarray | None:
     return arr
 
 
-def _sample_texture(arr: np.ndarray, uv: np.ndarray) -> np.ndarray:
+def sample_texture(arr: np.ndarray, uv: np.ndarray) -> np.ndarray:
     """Colours (n, 3) float64 of the texture at UVs (n, 2), wrapping like a repeating texture."""
     h, w = arr.shape[:2]
     u = np.mod(uv[:, 0], 1.0)
@@ -184,7 +184,7 @@ def _material_colour(material: Any) -> tuple[np.ndarray | None, np.ndarray | Non
     else:  # SimpleMaterial (OBJ/MTL): diffuse is RGBA uint8
         base = _rgb(getattr(material, "diffuse", None))
         image = getattr(material, "image", None)
-    return base, _image_array(image)
+    return base, image_array(image)
 
 
 def face_colors_of(geometry: Any) -> np.ndarray:
@@ -206,12 +206,14 @@ def face_colors_of(geometry: Any) -> np.ndarray:
             uv = np.asarray(uv, dtype=np.float64)
             if np.all(np.isfinite(uv)):
                 centroid_uv = uv[np.asarray(geometry.faces)].mean(axis=1)
-                out = _sample_texture(tex, centroid_uv)
+                out = sample_texture(tex, centroid_uv)
                 if base is not None and base.min() < 250:
                     out = out * (base / 255.0)
                 return np.clip(np.rint(out), 0, 255).astype(np.uint8)
         if tex is not None:
             out[:] = tex.reshape(-1, 3).mean(0)
+            if base is not None and base.min() < 250:
+                out = out * (base / 255.0)
             return np.clip(np.rint(out), 0, 255).astype(np.uint8)
         if base is not None:
             out[:] = base
@@ -289,10 +291,20 @@ class Normalized:
 
 def normalize_loaded(loaded: Any, *, rotation: np.ndarray | None = None, size: Sequence[float] | None = None,
                      scale: float | None = None) -> Normalized:
-    """Flatten, validate, rotate/scale into the canonical frame; raises :class:`MeshRejected`."""
+    """Flatten a trimesh Trimesh/Scene and normalise it (:func:`normalize_arrays`)."""
     v, f, c = flatten_geometry(loaded)
     if len(f) == 0 and len(getattr(loaded, "geometry", {}) or {}) > 0:
         raise MeshRejected("no triangles: the file holds only lines or points")
+    return normalize_arrays(v, f, c, rotation=rotation, size=size, scale=scale)
+
+
+def normalize_arrays(vertices: np.ndarray, faces: np.ndarray, colors: np.ndarray, *, rotation: np.ndarray | None = None,
+                     size: Sequence[float] | None = None, scale: float | None = None) -> Normalized:
+    """Validate, compact, rotate/scale into the canonical frame; raises :class:`MeshRejected`.
+
+    vertices (V, 3) float, faces (F, 3) int, colors (F, 3) uint8.
+    """
+    v, f, c = np.asarray(vertices, dtype=np.float64), np.asarray(faces, dtype=np.int64), np.asarray(colors)
     reason = validate_mesh(v, f)
     if reason:
         raise MeshRejected(reason)

@@ -30,7 +30,9 @@ from ..contracts import AssetRecord, MeshData, SkippedAsset
 from .catalog import Catalog
 from .importer import ImportReport, Progress, run_import
 from .naming import assign_groups, class_from_name, wall_mount
-from .normalize import MeshRejected, axes_rotation, extract_supports, normalize_loaded, support_at_height
+from .normalize import (MeshRejected, axes_rotation, extract_supports, flatten_geometry, image_array, normalize_arrays,
+                        support_at_height)
+from .objfile import ObjData, ObjMaterial, ObjUnsupported, face_colors, parse_mtl, parse_obj
 from .properties import parse_properties
 
 log = logging.getLogger(__name__)
@@ -295,7 +297,12 @@ def _model_rotation(props: dict[str, str]) -> np.ndarray:
     return OBJ_ROTATION @ m.reshape(3, 3)
 
 
-def _load_obj(entry: Sh3dEntry):
+def _load_arrays(entry: Sh3dEntry, *, fast: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Vertices (V, 3), faces (F, 3) and face colours (F, 3) uint8 of an entry's OBJ (OBJ frame).
+
+    The fast reader (:mod:`.objfile`) handles the common OBJ subset; files it does not support go
+    through trimesh's complete loader (``fast=False`` forces that path).
+    """
     import trimesh
 
     model = entry.props.get("model", "").strip()
@@ -313,19 +320,55 @@ def _load_obj(entry: Sh3dEntry):
     if not data.strip():
         raise MeshRejected(f"model file {model!r} is empty")
     extra: dict[str, bytes] = {}
-    if not re.search(rb"^\s*mtllib\s", data, re.M):
+    if b"mtllib" not in data:
         mtl = builtin_mtl(m.decode("latin-1") for m in re.findall(rb"^\s*usemtl\s+(\S+)", data, re.M))
         if mtl:
             extra[BUILTIN_MTL] = mtl
             data = f"mtllib {BUILTIN_MTL}\n".encode() + data
+    resolver = _zip_resolver(zf, names, posixpath.dirname(real), extra)
+    if fast:
+        try:
+            return _fast_arrays(parse_obj(data), resolver)
+        except ObjUnsupported as e:
+            log.debug("sh3d: %s: %s, using trimesh", entry.label, e)
     try:
-        return trimesh.load(io.BytesIO(data), file_type="obj",
-                            resolver=_zip_resolver(zf, names, posixpath.dirname(real), extra),
-                            force="scene", process=False, group_material=True, skip_materials=False)
-    except MeshRejected:
-        raise
+        loaded = trimesh.load(io.BytesIO(data), file_type="obj", resolver=resolver,
+                              force="scene", process=False, group_material=True, skip_materials=False)
     except Exception as e:  # trimesh raises many types on malformed files
         raise MeshRejected(f"model file {model!r} unreadable ({type(e).__name__}: {e})") from None
+    v, f, c = flatten_geometry(loaded)
+    if len(f) == 0 and len(loaded.geometry) > 0:
+        raise MeshRejected("no triangles: the file holds only lines or points")
+    return v, f, c
+
+
+def _fast_arrays(obj: ObjData, resolver) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    if len(obj.faces) == 0:
+        raise ObjUnsupported("no faces (maybe only lines or points)")  # let trimesh name the problem
+    materials: dict = {}
+    for lib in obj.mtllibs:
+        for name in [lib] + (lib.split() if " " in lib else []):
+            try:
+                found = parse_mtl(resolver.get(name))
+            except (KeyError, OSError, zipfile.BadZipFile):
+                continue
+            folder = posixpath.dirname(name.replace("\\", "/"))
+            for key, mat in found.items():
+                if mat.texture and folder:
+                    mat = ObjMaterial(kd=mat.kd, texture=posixpath.join(folder, mat.texture))
+                materials.setdefault(key, mat)
+            break
+
+    def load_texture(name: str) -> np.ndarray | None:
+        from PIL import Image
+
+        try:
+            return image_array(Image.open(io.BytesIO(resolver.get(name))))
+        except Exception:  # missing or undecodable image: the material colour is used instead
+            log.debug("sh3d: texture %r unreadable", name)
+            return None
+
+    return obj.vertices, obj.faces, face_colors(obj, materials, load_texture)
 
 
 def convert_entry(entry: Sh3dEntry) -> tuple[AssetRecord, MeshData] | SkippedAsset:
@@ -359,8 +402,8 @@ def _convert(entry: Sh3dEntry) -> tuple[AssetRecord, MeshData]:
     elevation = max(0.0, (_float(p, "elevation") or 0.0) / 100.0)
     drop = _float(p, "dropOnTopElevation")
     rotation = _model_rotation(p)
-    loaded = _load_obj(entry)
-    norm = normalize_loaded(loaded, rotation=rotation, size=size_m)
+    v, f, c = _load_arrays(entry)
+    norm = normalize_arrays(v, f, c, rotation=rotation, size=size_m)
     mesh = norm.mesh
     category = p.get("category", "").strip()
     supports = extract_supports(mesh)
