@@ -150,10 +150,11 @@ def test_resume_continues_training(tmp_path):
     cfg1 = parse_train_config({**TINY, "optim": {**TINY["optim"], "epochs": 1}})
     src = MemorySource(_scenes())
     train(cfg1, tmp_path, source=src)
-    cfg2 = parse_train_config({**TINY, "optim": {**TINY["optim"], "epochs": 2}})
+    cfg2 = parse_train_config({**TINY, "optim": {**TINY["optim"], "epochs": 6}})
     res = train(cfg2, tmp_path, resume=True, source=src)
-    assert res.steps == 2 and load_checkpoint(tmp_path / "last.pt")["epoch"] == 2
-    assert len((tmp_path / "metrics.csv").read_text().strip().splitlines()) == 3
+    state = load_checkpoint(tmp_path / "last.pt")
+    assert res.steps == 6 and state["epoch"] == 6 and state["scheduler"]["total_steps"] == 6
+    assert len((tmp_path / "metrics.csv").read_text().strip().splitlines()) == 7
 
 
 def test_predict_scene_shapes_and_scores():

@@ -105,5 +105,8 @@ def register(app: typer.Typer) -> None:
         table.add_column("time (s)", justify="right")
         table.add_column("peak memory (MiB)", justify="right")
         table.add_row("forward", f"{res.forward_s:.3f}", f"{res.forward_peak_mib:.0f}")
-        table.add_row("forward+backward", f"{res.forward_backward_s:.3f}", f"{res.forward_backward_peak_mib:.0f}")
+        if res.forward_backward_s is not None and res.forward_backward_peak_mib is not None:
+            table.add_row("forward+backward", f"{res.forward_backward_s:.3f}", f"{res.forward_backward_peak_mib:.0f}")
         Console().print(table)
+        if res.note:
+            Console().print(res.note)

@@ -34,10 +34,11 @@ class BenchResult:
     threads: int
     parameters: int
     forward_s: float
-    forward_backward_s: float
+    forward_backward_s: float | None
     forward_peak_mib: float
-    forward_backward_peak_mib: float
+    forward_backward_peak_mib: float | None
     repeats: int
+    note: str = ""
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -110,8 +111,14 @@ def run_model_bench(cfg: TrainConfig, *, points: int = 100_000, backend: str = "
         return statistics.median(times), peak
 
     fwd_s, fwd_mem = measure(forward)
-    fb_s, fb_mem = measure(forward_backward)
+    fb_s: float | None = None
+    fb_mem: float | None = None
+    note = ""
+    if backend == "spconv" and not dev.startswith("cuda"):
+        note = "spconv's CPU package has no backward pass (it asks for a CUDA stream): forward only"
+    else:
+        fb_s, fb_mem = measure(forward_backward)
     return BenchResult(points=points, voxels=len(vox.coords), backend=backend, device=dev,
                        threads=torch.get_num_threads(), parameters=n_params, forward_s=fwd_s,
                        forward_backward_s=fb_s, forward_peak_mib=fwd_mem, forward_backward_peak_mib=fb_mem,
-                       repeats=repeats)
+                       repeats=repeats, note=note)

@@ -202,7 +202,15 @@ class Trainer:
         if state.get("optimizer") is not None:
             self.optimizer.load_state_dict(state["optimizer"])
         if state.get("scheduler") is not None:
-            self.scheduler.load_state_dict(state["scheduler"])
+            fresh = self.scheduler.state_dict()
+            saved = dict(state["scheduler"])
+            if saved.get("total_steps") != fresh["total_steps"]:
+                # the run was extended (or shortened): keep the position, use the new schedule's length
+                log.warning("schedule length changed from %s to %s steps on resume", saved.get("total_steps"),
+                            fresh["total_steps"])
+                saved["total_steps"] = fresh["total_steps"]
+                saved["_schedule_phases"] = fresh["_schedule_phases"]
+            self.scheduler.load_state_dict(saved)
         if self.scaler is not None and state.get("scaler") is not None:
             self.scaler.load_state_dict(state["scaler"])
 
