@@ -83,6 +83,7 @@ def register(app: typer.Typer) -> None:
         device: str = typer.Option("cpu", "--device", help="cpu or cuda"),
         config: Path = typer.Option(None, "--config", help="model config (default: the paper model)"),
         repeats: int = typer.Option(3, "--repeats", help="timed runs after one warm-up (median reported)"),
+        threads: int = typer.Option(0, "--threads", help="torch CPU threads (0 = the config's, else torch default)"),
         as_json: bool = typer.Option(False, "--json", help="print JSON instead of a table"),
     ) -> None:
         """Forward and forward+backward time and peak memory of the model on one scene."""
@@ -96,6 +97,8 @@ def register(app: typer.Typer) -> None:
         if backend not in ("torch", "spconv"):
             raise ConfigError(f"--backend {backend!r}: expected torch or spconv")
         cfg = load_train_config(config) if config is not None else TrainConfig()
+        if threads > 0:
+            cfg = cfg.model_copy(update={"threads": threads})
         res = run_model_bench(cfg, points=points, backend=backend, device=device, repeats=repeats)
         if as_json:
             typer.echo(json.dumps(res.as_dict()))

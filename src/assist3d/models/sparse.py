@@ -213,14 +213,9 @@ class DownConv3d(nn.Module):
         coarse, inverse, octant = x.cset.down()
         w = self.weight.to(x.feats.dtype)
         # One batched matmul over the 8 octants: (N, C_in) x (C_in, C_out) per row's octant, grouped.
-        out: torch.Tensor | None = None
-        for o in range(8):
-            rows = torch.nonzero(octant == o).squeeze(1)
-            src = x.feats[rows] @ w[o]
-            if out is None:
-                out = src.new_zeros((len(coarse), w.shape[2]))
-            out = out.index_add(0, inverse[rows], src)
-        assert out is not None
+        rows = [torch.nonzero(octant == o).squeeze(1) for o in range(8)]
+        src = torch.cat([x.feats[r] @ w[o] for o, r in enumerate(rows)])
+        out = src.new_zeros((len(coarse), w.shape[2])).index_add(0, inverse[torch.cat(rows)], src)
         if self.bias is not None:
             out = out + self.bias.to(out.dtype)
         return SparseTensor(feats=out, cset=coarse, stride=x.stride * 2)
@@ -244,7 +239,6 @@ class UpConv3d(nn.Module):
         if x.cset is not coarse:
             raise ValueError("UpConv3d: the input is not the stride-2 parent of the target coordinates")
         w = self.weight.to(x.feats.dtype)
-        out: torch.Tensor | None = None
         if _BACKEND["name"] == "spconv":
             from . import spconv_backend
 
@@ -252,13 +246,9 @@ class UpConv3d(nn.Module):
             if self.bias is not None:
                 out = out + self.bias.to(out.dtype)
             return SparseTensor(feats=out, cset=target.cset, stride=target.stride)
-        for o in range(8):
-            rows = torch.nonzero(octant == o).squeeze(1)
-            src = x.feats[inverse[rows]] @ w[o]
-            if out is None:
-                out = src.new_zeros((len(target.cset), w.shape[2]))
-            out = out.index_copy(0, rows, src)
-        assert out is not None
+        rows = [torch.nonzero(octant == o).squeeze(1) for o in range(8)]
+        src = torch.cat([x.feats[inverse[r]] @ w[o] for o, r in enumerate(rows)])
+        out = src.new_zeros((len(target.cset), w.shape[2])).index_copy(0, torch.cat(rows), src)
         if self.bias is not None:
             out = out + self.bias.to(out.dtype)
         return SparseTensor(feats=out, cset=target.cset, stride=target.stride)
