@@ -13,6 +13,16 @@ from typing import Any, Iterator
 import numpy as np
 
 
+def _default_mode() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+# mkstemp creates private (0600) files; outputs get the usual permissions (0666 minus the umask).
+_FILE_MODE = _default_mode()
+
+
 @contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it over ``path`` only if the block succeeds."""
@@ -21,6 +31,10 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     tmp_path = Path(tmp)
+    try:
+        os.chmod(tmp_path, _FILE_MODE)
+    except OSError:  # a file system without permissions: keep the private mode
+        pass
     try:
         yield tmp_path
         os.replace(tmp_path, path)

@@ -23,7 +23,7 @@ import numpy as np
 from .config import GenerateConfig, config_to_dict, dump_config
 from .errors import AssistError, ConfigError
 from .export import Manifest, read_scene_meta, write_scene
-from .export.writer import make_readable, remove_stale_temps
+from .export.writer import remove_stale_temps
 from .rng import make_rng, scene_seed
 
 log = logging.getLogger(__name__)
@@ -226,7 +226,6 @@ def generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int
         if remove_stale_temps(out):
             log.info("removed temporary files of an interrupted run in %s", out)
         dump_config(cfg, out / "config.yaml")
-        make_readable(out / "config.yaml")
 
         todo: list[int] = []
         skipped: list[int] = []

@@ -86,9 +86,6 @@ class Manifest:
     def write(self) -> None:
         self.data["scenes"] = [self._entries[k] for k in sorted(self._entries)]
         write_json_atomic(self.path, self.data)
-        from .writer import make_readable
-
-        make_readable(self.path)
 
     @property
     def entries(self) -> list[dict]:

@@ -28,7 +28,7 @@ from .ply import ply_bytes
 log = logging.getLogger(__name__)
 
 __all__ = ["ARRAYS", "META_NAME", "write_scene", "read_scene_meta", "load_scene_arrays", "file_digest",
-           "remove_stale_temps", "make_readable"]
+           "remove_stale_temps"]
 
 ARRAYS: dict[str, tuple[str, int]] = {  # name -> (dtype, columns; 0 = 1-d)
     "coord": ("float32", 3),
@@ -39,24 +39,6 @@ ARRAYS: dict[str, tuple[str, int]] = {  # name -> (dtype, columns; 0 = 1-d)
 }
 META_NAME = "meta.json"
 MARKER_FORMAT = "assist3d-scene"
-
-
-def _default_mode() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return 0o666 & ~mask
-
-
-_MODE = _default_mode()
-
-
-def make_readable(path: str | Path) -> None:
-    """Give a file written through a private temporary file (mode 0600) the usual permissions
-    (0666 minus the umask), so datasets can be shared."""
-    try:
-        os.chmod(path, _MODE)
-    except OSError as e:  # e.g. a read-only or foreign file system: keep going, say so
-        log.warning("%s: could not set permissions (%s)", path, e)
 
 
 def file_digest(data: bytes) -> str:
@@ -87,7 +69,6 @@ def write_scene(scene_dir: str | Path, sample: PointSample, layout: SceneLayout,
 
     def put(name: str, data: bytes) -> None:
         write_bytes_atomic(d / name, data)
-        make_readable(d / name)
         files[name] = {"bytes": len(data), "blake2b": file_digest(data)}
 
     arrays = {"coord": sample.coord, "color": sample.color, "normal": sample.normal,
@@ -101,14 +82,12 @@ def write_scene(scene_dir: str | Path, sample: PointSample, layout: SceneLayout,
         (d / "points.ply").unlink(missing_ok=True)
     if glb_writer is not None:
         glb_writer(d / "scene.glb")
-        make_readable(d / "scene.glb")
         data = (d / "scene.glb").read_bytes()
         files["scene.glb"] = {"bytes": len(data), "blake2b": file_digest(data)}
     marker = {"format": MARKER_FORMAT, "version": 1, **meta, "points": len(sample), "files": files}
     if isinstance(marker.get("seconds"), dict):
         marker["seconds"] = {**marker["seconds"], "write": round(time.perf_counter() - t0, 4)}
     write_json_atomic(d / META_NAME, marker)
-    make_readable(d / META_NAME)
     return marker
 
 
