@@ -18,6 +18,7 @@ import math
 
 import numpy as np
 import shapely
+from scipy import ndimage
 
 from ...config import LayoutConfig
 from ...contracts import Room
@@ -155,6 +156,8 @@ class FloorProblem:
         self.static_sat = self.grid.sat(self.grid.static)
         self._cache: dict[int, tuple[Candidates, tuple[np.ndarray, ...]]] = {}
         self._sat: np.ndarray | None = None
+        self.hmax = float(max(np.diff(self.grid.xb).max(), np.diff(self.grid.yb).max()))
+        self._static_radius = self._free_radius(self.grid.static)
 
     # ------------------------------------------------------------ candidates
 
@@ -246,6 +249,12 @@ class FloorProblem:
     def _has_global(self, k: int) -> bool:
         return any(r.kind in ("edge", "middle") for r in self.items[k].relations)
 
+    def _free_radius(self, blocked: np.ndarray) -> float:
+        """An upper bound of the radius of the largest free disc in the room (plus a cell)."""
+        if blocked.all():
+            return 0.0
+        return float(ndimage.distance_transform_edt(~blocked, sampling=self.hmax).max()) + self.hmax
+
     def unavoidable(self, k: int) -> str | None:
         item = self.items[k]
         if item.forced_reason:
@@ -253,7 +262,9 @@ class FloorProblem:
         w, d, h = item.record.size
         if h > self.room.height:
             return f"taller ({h:.2f} m) than the room ({self.room.height:.2f} m)"
-        if len(self._static(k)[0]) == 0:
+        # Cheap and exact enough: a footprint whose inscribed disc is wider than any free disc
+        # of the empty room fits nowhere (the full test runs lazily in ``candidates``).
+        if min(w, d) / 2 > self._static_radius or (self._hard_edge(k) and len(self._static(k)[0]) == 0):
             where = "against a wall " if self._hard_edge(k) else ""
             return f"footprint {w:.2f} x {d:.2f} m fits nowhere {where}in the empty room"
         return None
@@ -261,6 +272,8 @@ class FloorProblem:
     def candidates(self, k: int) -> tuple[list[Choice], str]:
         w, d, _ = self.items[k].record.size
         c, (i0, i1, j0, j1) = self._static(k)
+        if len(c) == 0:
+            return [], f"footprint {w:.2f} x {d:.2f} m fits nowhere in the empty room"
         if self._sat is None:
             self._sat = self.grid.sat(self.occ > 0)  # one table per search state, shared by all items
         ok = self._sat[j1, i1] - self._sat[j0, i1] - self._sat[j1, i0] + self._sat[j0, i0] == 0

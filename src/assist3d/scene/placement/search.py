@@ -11,8 +11,10 @@ Branch and bound: once a layout with ``S`` skips is known, any node whose path a
 ``S`` skips (plus the skips the problem can prove are coming) is cut. Backtracking therefore
 returns straight to the objects placed just before the last skipped object and repositions them
 (the paper's "backtrack to reposition the previous object"), then tries the skipped object
-again. An object that cannot be placed even in the empty scene is dropped up front and never
-causes backtracking.
+again. Such a backtrack is a *probe* for the next object the best layout skipped: if that object
+still finds no place, the branch is abandoned at once instead of re-evaluating every later
+object (conflict-directed; this makes each backtrack cost a few nodes). An object that cannot be
+placed even in the empty scene is dropped up front and never causes backtracking.
 
 Bounds, all deterministic except the wall-clock safety net: ``max_backtracks`` alternatives in
 all, ``patience`` alternatives without an improvement, ``budget_s`` seconds.
@@ -20,6 +22,7 @@ all, ``patience`` alternatives without an improvement, ``budget_s`` seconds.
 
 from __future__ import annotations
 
+import bisect
 import math
 import time
 from dataclasses import dataclass, field
@@ -78,6 +81,7 @@ class _Frame:
     skip_done: bool = False
     taken: Choice | None = None
     skipped_here: bool = False
+    prev_probe: int | None = None
 
 
 def depth_first(problem: SearchProblem, *, max_backtracks: int, patience: int, budget_s: float) -> SearchResult:
@@ -93,9 +97,12 @@ def depth_first(problem: SearchProblem, *, max_backtracks: int, patience: int, b
     nodes = backtracks = since_best = solutions = 0
     stop_reason = "exhausted"
     depth = 0
+    best_skips: list[int] = []  # depths where the best layout skipped an object it could have placed
+    probe: int | None = None  # the skipped object the current backtrack tries to make room for
 
     def record() -> None:
-        nonlocal best, best_skipped, since_best, solutions
+        nonlocal best, best_skipped, since_best, solutions, best_skips
+        best_skips = [d for d, f in enumerate(frames) if f.skipped_here and f.cost]
         choices = [f.taken if not f.skipped_here else None for f in frames]
         reasons = [f.reason if f.skipped_here else None for f in frames]
         best = (choices, reasons)
@@ -103,8 +110,13 @@ def depth_first(problem: SearchProblem, *, max_backtracks: int, patience: int, b
         since_best = 0
         solutions += 1
 
+    def next_skip(d: int) -> int | None:
+        i = bisect.bisect_right(best_skips, d)
+        return best_skips[i] if i < len(best_skips) else None
+
     def undo(f: _Frame) -> None:
-        nonlocal skipped, placed
+        nonlocal skipped, placed, probe
+        probe = f.prev_probe
         if f.taken is not None:
             problem.pop(len(frames) - 1)
             placed -= 1
@@ -143,6 +155,11 @@ def depth_first(problem: SearchProblem, *, max_backtracks: int, patience: int, b
                     stop_reason = "budget"
                     break
             choice = f.cands[f.next]
+            f.prev_probe = probe
+            if f.next > 0:
+                probe = next_skip(depth)
+            elif depth == probe:
+                probe = None  # the object the backtrack made room for fits now
             f.next += 1
             problem.push(depth, choice)
             placed += 1
@@ -151,7 +168,10 @@ def depth_first(problem: SearchProblem, *, max_backtracks: int, patience: int, b
             continue
         if not f.skip_done:
             f.skip_done = True
-            if skipped + f.cost < best_skipped:
+            if skipped + f.cost < best_skipped and not (f.cost and depth == probe):
+                f.prev_probe = probe
+                if f.cands:
+                    probe = next_skip(depth)
                 skipped += f.cost
                 f.skipped_here = True
                 depth += 1
