@@ -115,7 +115,12 @@ class RenderConfig(_Section):
                                                             "walls, m.")
     camera_height: float | None = Field(None, description="Camera height, m; None = mid-height of the room "
                                                           "(paper: mid-height plane).")
-    pitch_deg: float = Field(0.0, description="Camera pitch, degrees (negative looks down).")
+    pitch_deg: float | list[float] = Field([-30.0, 5.0], description="Camera pitch, degrees (negative looks down); a "
+                                                                     "list cycles over the views of each vantage point. "
+                                                                     "The paper does not state it; a level camera at "
+                                                                     "mid-height sees no floor within ~3 m, so views "
+                                                                     "alternate between looking down and level, as a "
+                                                                     "hand-held scan does.")
     width: int = Field(640, ge=8, description="Image width, px (ScanNet depth: 640).")
     height: int = Field(480, ge=8, description="Image height, px (ScanNet depth: 480).")
     fx: float = Field(577.9, gt=0, description="Focal length x, px (ScanNet depth ~577.9).")

@@ -38,15 +38,18 @@ def look_pose(center: np.ndarray, yaw: float, pitch: float = 0.0) -> np.ndarray:
 
 
 def vantage_cameras(centers: np.ndarray, cfg: RenderConfig) -> list[Camera]:
-    """``views_per_point`` cameras per centre, yaw steps of 360 / views_per_point degrees.
+    """``views_per_point`` cameras per centre, yaw steps of 360 / views_per_point degrees; view k
+    of a centre is pitched by ``pitch_deg[k % len(pitch_deg)]``.
 
     centers: (K, 3) float64. Views are ordered centre by centre, yaw by yaw.
     """
     w, h, fx, fy, cx, cy = intrinsics(cfg)
-    pitch = math.radians(cfg.pitch_deg)
+    pitches = [math.radians(p) for p in (cfg.pitch_deg if isinstance(cfg.pitch_deg, list) else [cfg.pitch_deg])]
+    if not pitches:
+        pitches = [0.0]
     step = 2.0 * math.pi / cfg.views_per_point
     return [
-        Camera(w, h, fx, fy, cx, cy, look_pose(c, k * step, pitch))
+        Camera(w, h, fx, fy, cx, cy, look_pose(c, k * step, pitches[k % len(pitches)]))
         for c in np.asarray(centers, dtype=np.float64)
         for k in range(cfg.views_per_point)
     ]
