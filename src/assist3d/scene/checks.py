@@ -6,9 +6,10 @@
   ``tol`` in x, y and z, points of one mesh (its vertices plus seeded surface samples, those
   inside the other's bounds) are tested against the other mesh. A point is *inside* when rays
   cast along the six axis directions cross the other mesh an odd number of times (crossings
-  less than 1 mm apart counted once: catalog meshes often hold faces twice) in at least four of
-  them (a majority vote that tolerates the holes of non-watertight catalog meshes and
-  does not mistake the open cavity of a shelf or the space under a table for its material), and
+  less than 1 mm apart counted once: catalog meshes often hold faces twice) in at least five of
+  them (a vote that tolerates one hole of a non-watertight catalog mesh yet does not mistake
+  the open cavity of a shelf, the space under a table or the inside of a single-sided rim for
+  material), and
   it counts only if its depth (distance to the nearest crossing along 14 directions) exceeds
   ``tol``;
 * **support**: an on-top object must touch its parent within ``tol``: rays cast straight down
@@ -41,6 +42,7 @@ __all__ = ["check_layout"]
 
 SAMPLES = 800  # surface samples per mesh for the interpenetration test (plus its vertices)
 MAX_POINTS = 6000
+MIN_VOTES = 5  # of the six axis rays that must see the point inside
 MAX_TESTED = 1500  # points of one mesh tested inside another, at most
 AXES = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=np.float64)
 DIAGONALS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=np.float64) / np.sqrt(3)
@@ -116,7 +118,7 @@ def _inside_depth(points: np.ndarray, other: _Mesh, tol: float, seed: int) -> fl
         count, nearest = _crossings(other.tm, sel, axis)
         votes += count % 2
         depth = np.minimum(depth, nearest)
-    keep = (votes >= 4) & (depth > tol)
+    keep = (votes >= MIN_VOTES) & (depth > tol)
     if not keep.any():
         return 0.0
     sel, depth = sel[keep], depth[keep]
