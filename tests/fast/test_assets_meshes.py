@@ -117,6 +117,8 @@ def mesh_folder(tmp_path: Path) -> Path:
     outside = tmp_path / "outside.obj"
     outside.write_text("v 0 0 0\nv 1 0 0\nv 0 1 1\nf 1 2 3\n")
     os.symlink(outside, folder / "link.obj")
+    (tmp_path / "outside.mtl").write_text("newmtl red\nKd 1 0 0\n")
+    (folder / "escape.obj").write_text("mtllib ../outside.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 1\nusemtl red\nf 1 2 3\n")
     return folder
 
 
@@ -127,6 +129,7 @@ MANIFEST_ROWS = [
     {"path": "box.off", "class": "cabinet", "height": 2.0, "up": "+z", "front": "-y"},
     {"path": "box.obj", "class": "table"},  # default +y up: the 0.5 m side becomes the height
     {"path": "sub/cup.ply", "class": "cup", "size": "0.08 x 0.08 x 0.1", "up": "+z", "front": "-y"},
+    {"path": "escape.obj", "class": "sheet", "up": "+z", "front": "-y"},  # its MTL lies outside: not read
     {"path": "empty.obj", "class": "thing"},
     {"path": "nan.obj", "class": "thing"},
     {"path": "flat.obj", "class": "thing"},
@@ -148,7 +151,8 @@ def test_import_meshes_json_manifest(tmp_path, mesh_folder):
     cat = Catalog.open_or_create(tmp_path / "lib")
     report = import_meshes(cat, mesh_folder, manifest, workers=1)
     got = {r.extra["path"]: r for r in cat.records}
-    assert set(got) == {"box.glb", "box.ply", "box.stl", "box.off", "box.obj", "sub/cup.ply"}
+    assert set(got) == {"box.glb", "box.ply", "box.stl", "box.off", "box.obj", "sub/cup.ply", "escape.obj"}
+    assert np.all(cat.load_mesh(got["escape.obj"]).face_colors == 160)  # grey: the outside MTL was refused
     assert np.allclose(got["box.glb"].size, (1.2, 0.6, 0.9), rtol=1e-5)
     assert got["box.glb"].class_name == "storage box" and got["box.glb"].license == "CC0"
     assert np.allclose(got["box.ply"].size, (1.0, 0.5, 0.8), rtol=1e-5) and got["box.ply"].groups == ("floor",)
@@ -165,7 +169,7 @@ def test_import_meshes_json_manifest(tmp_path, mesh_folder):
     # re-running replaces the collection's records: same ids, no duplicated skip reports
     again = import_meshes(Catalog.open(tmp_path / "lib"), mesh_folder, manifest, workers=1)
     cat2 = Catalog.open(tmp_path / "lib")
-    assert again.total == 6 and len(cat2) == 6 and len(cat2.skipped) == 12
+    assert again.total == 7 and len(cat2) == 7 and len(cat2.skipped) == 12
 
 
 def test_import_meshes_csv_manifest_and_unreadable_manifest(tmp_path, mesh_folder):

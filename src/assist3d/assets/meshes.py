@@ -45,7 +45,8 @@ from ..errors import AssetError
 from .catalog import Catalog
 from .importer import ImportReport, Progress, run_import
 from .naming import assign_groups, class_from_name
-from .normalize import MeshRejected, axes_rotation, extract_supports, normalize_loaded
+from .normalize import MeshRejected, axes_rotation, extract_supports, flatten_geometry, normalize_arrays
+from .objfile import ObjUnsupported, obj_arrays
 
 log = logging.getLogger(__name__)
 
@@ -262,25 +263,32 @@ def _convert(item: MeshItem, label: str) -> tuple[AssetRecord, MeshData] | Skipp
         if not data.strip():
             raise MeshRejected("empty file")
         ext = FORMATS[item.path.rsplit(".", 1)[-1].lower()]
-        try:
-            loaded = trimesh.load(io.BytesIO(data), file_type=ext, force="scene", process=False,
-                                  resolver=_folder_resolver(folder, posixpath.dirname(item.path)))
-        except MeshRejected:
-            raise
-        except Exception as e:  # loaders raise many exception types on malformed files
-            raise MeshRejected(f"unreadable {ext} file ({type(e).__name__}: {e})") from None
+        resolver = _folder_resolver(folder, posixpath.dirname(item.path))
+        arrays = None
+        if ext == "obj":
+            try:
+                arrays = obj_arrays(data, resolver.get)
+            except ObjUnsupported as e:
+                log.debug("meshes: %s: %s, using trimesh", label, e)
+        if arrays is None:
+            try:
+                loaded = trimesh.load(io.BytesIO(data), file_type=ext, force="scene", process=False, resolver=resolver)
+            except MeshRejected:
+                raise
+            except Exception as e:  # loaders raise many exception types on malformed files
+                raise MeshRejected(f"unreadable {ext} file ({type(e).__name__}: {e})") from None
+            arrays = flatten_geometry(loaded)
+            if len(arrays[1]) == 0 and len(getattr(loaded, "geometry", {}) or {}) > 0:
+                raise MeshRejected("no triangles: the file holds only lines or points")
+        v, f, c = arrays
         rotation = axes_rotation(item.up, item.front)
         scale = item.scale
-        if item.size is None and item.height is not None:
-            from .normalize import flatten_geometry
-
-            v, f, _ = flatten_geometry(loaded)
-            if len(f):
-                z = (v[np.unique(f)] @ rotation.T)[:, 2]
-                h = float(z.max() - z.min()) if np.all(np.isfinite(z)) else 0.0
-                if h > 0:
-                    scale = item.height / h
-        norm = normalize_loaded(loaded, rotation=rotation, size=item.size, scale=scale)
+        if item.size is None and item.height is not None and len(f):
+            z = (v[np.unique(f)] @ rotation.T)[:, 2]
+            h = float(z.max() - z.min()) if np.all(np.isfinite(z)) else 0.0
+            if h > 0:
+                scale = item.height / h
+        norm = normalize_arrays(v, f, c, rotation=rotation, size=item.size, scale=scale)
     except MeshRejected as e:
         return SkippedAsset(label, str(e))
     except OSError as e:

@@ -12,12 +12,18 @@ per face (the texture sampled at each face's UV centroid, else ``Kd``, else grey
 
 from __future__ import annotations
 
+import io
+import logging
+import posixpath
+import zipfile
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
-from .normalize import NEUTRAL_GREY, sample_texture
+from .normalize import NEUTRAL_GREY, image_array, sample_texture
+
+log = logging.getLogger(__name__)
 
 class ObjUnsupported(ValueError):
     """The file uses an OBJ feature this reader leaves to the complete (slower) loader."""
@@ -223,3 +229,41 @@ def face_colors(obj: ObjData, materials: dict[str, ObjMaterial],
         elif mat.kd is not None:
             out[sel] = mat.kd
     return np.clip(np.rint(out), 0, 255).astype(np.uint8)
+
+
+def obj_arrays(data: bytes, get: Callable[[str], bytes]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Vertices (V, 3) float64, faces (F, 3) int64 and face colours (F, 3) uint8 of OBJ bytes.
+
+    ``get(name)`` returns the bytes of a file the OBJ names (MTL, textures), relative to the OBJ's
+    folder, or raises (KeyError, OSError, ValueError) when it is missing or not allowed; missing
+    material files and unreadable textures fall back to grey / ``Kd``. Raises
+    :class:`ObjUnsupported` when the caller should use a complete loader instead (including a
+    file without faces, so that loader can say what it holds).
+    """
+    obj = parse_obj(data)
+    if len(obj.faces) == 0:
+        raise ObjUnsupported("no faces (maybe only lines or points)")
+    materials: dict[str, ObjMaterial] = {}
+    for lib in obj.mtllibs:
+        for name in [lib] + (lib.split() if " " in lib else []):
+            try:
+                found = parse_mtl(get(name))
+            except (KeyError, OSError, ValueError, zipfile.BadZipFile):
+                continue
+            folder = posixpath.dirname(name.replace("\\", "/"))
+            for key, mat in found.items():
+                if mat.texture and folder:
+                    mat = ObjMaterial(kd=mat.kd, texture=posixpath.join(folder, mat.texture))
+                materials.setdefault(key, mat)
+            break
+
+    def load_texture(name: str) -> np.ndarray | None:
+        from PIL import Image
+
+        try:
+            return image_array(Image.open(io.BytesIO(get(name))))
+        except Exception:  # missing, refused or undecodable image: the material colour is used instead
+            log.debug("texture %r unreadable", name)
+            return None
+
+    return obj.vertices, obj.faces, face_colors(obj, materials, load_texture)

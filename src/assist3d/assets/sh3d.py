@@ -30,9 +30,9 @@ from ..contracts import AssetRecord, MeshData, SkippedAsset
 from .catalog import Catalog
 from .importer import ImportReport, Progress, run_import
 from .naming import assign_groups, class_from_name, wall_mount
-from .normalize import (MeshRejected, axes_rotation, extract_supports, flatten_geometry, image_array, normalize_arrays,
+from .normalize import (MeshRejected, axes_rotation, extract_supports, flatten_geometry, normalize_arrays,
                         support_at_height)
-from .objfile import ObjData, ObjMaterial, ObjUnsupported, face_colors, parse_mtl, parse_obj
+from .objfile import ObjUnsupported, obj_arrays
 from .properties import parse_properties
 
 log = logging.getLogger(__name__)
@@ -328,7 +328,7 @@ def _load_arrays(entry: Sh3dEntry, *, fast: bool = True) -> tuple[np.ndarray, np
     resolver = _zip_resolver(zf, names, posixpath.dirname(real), extra)
     if fast:
         try:
-            return _fast_arrays(parse_obj(data), resolver)
+            return obj_arrays(data, resolver.get)
         except ObjUnsupported as e:
             log.debug("sh3d: %s: %s, using trimesh", entry.label, e)
     try:
@@ -340,35 +340,6 @@ def _load_arrays(entry: Sh3dEntry, *, fast: bool = True) -> tuple[np.ndarray, np
     if len(f) == 0 and len(loaded.geometry) > 0:
         raise MeshRejected("no triangles: the file holds only lines or points")
     return v, f, c
-
-
-def _fast_arrays(obj: ObjData, resolver) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    if len(obj.faces) == 0:
-        raise ObjUnsupported("no faces (maybe only lines or points)")  # let trimesh name the problem
-    materials: dict = {}
-    for lib in obj.mtllibs:
-        for name in [lib] + (lib.split() if " " in lib else []):
-            try:
-                found = parse_mtl(resolver.get(name))
-            except (KeyError, OSError, zipfile.BadZipFile):
-                continue
-            folder = posixpath.dirname(name.replace("\\", "/"))
-            for key, mat in found.items():
-                if mat.texture and folder:
-                    mat = ObjMaterial(kd=mat.kd, texture=posixpath.join(folder, mat.texture))
-                materials.setdefault(key, mat)
-            break
-
-    def load_texture(name: str) -> np.ndarray | None:
-        from PIL import Image
-
-        try:
-            return image_array(Image.open(io.BytesIO(resolver.get(name))))
-        except Exception:  # missing or undecodable image: the material colour is used instead
-            log.debug("sh3d: texture %r unreadable", name)
-            return None
-
-    return obj.vertices, obj.faces, face_colors(obj, materials, load_texture)
 
 
 def convert_entry(entry: Sh3dEntry) -> tuple[AssetRecord, MeshData] | SkippedAsset:
