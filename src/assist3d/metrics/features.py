@@ -45,6 +45,13 @@ def sample_mesh_points(mesh: MeshData, n: int, *, rng: np.random.Generator) -> n
     return (1 - r1)[:, None] * t[:, 0] + (r1 * (1 - r2))[:, None] * t[:, 1] + (r1 * r2)[:, None] * t[:, 2]
 
 
+def _unit_histogram(x: np.ndarray, bins: int) -> np.ndarray:
+    """Counts (bins,) float64 of ``x`` over ``bins`` equal bins of [0, 1); values outside are
+    clipped into the end bins (``np.histogram`` is ~10x slower for these small arrays)."""
+    idx = np.clip((x * bins).astype(np.int64), 0, bins - 1)
+    return np.bincount(idx, minlength=bins).astype(np.float64)
+
+
 def shape_descriptor(points: np.ndarray, *, rng: np.random.Generator) -> np.ndarray | None:
     """The (FEATURE_DIM,) float32 descriptor of one object's points (z up), or None if too few."""
     p = np.asarray(points, dtype=np.float64)
@@ -59,19 +66,20 @@ def shape_descriptor(points: np.ndarray, *, rng: np.random.Generator) -> np.ndar
     # D2 distribution
     i = rng.integers(0, len(p), N_PAIRS)
     j = rng.integers(0, len(p), N_PAIRS)
-    d = np.linalg.norm(p[i] - p[j], axis=1) / rms
-    d2 = np.histogram(np.clip(d, 0, 3.999), bins=16, range=(0.0, 4.0))[0].astype(np.float64)
+    diff = p[i] - p[j]
+    d = np.sqrt(np.einsum("ij,ij->i", diff, diff)) / rms
+    d2 = _unit_histogram(d / 4.0, 16)
     d2 /= max(d2.sum(), 1.0)
     # height profile
     z = p[:, 2]
     zr = z.max() - z.min()
     zn = (z - z.min()) / zr if zr > 1e-9 else np.zeros_like(z)
-    hz = np.histogram(np.clip(zn, 0, 0.9999), bins=8, range=(0.0, 1.0))[0].astype(np.float64)
+    hz = _unit_histogram(zn, 8)
     hz /= hz.sum()
     # radial profile around the vertical axis
-    r = np.linalg.norm(c[:, :2], axis=1)
+    r = np.sqrt(np.einsum("ij,ij->i", c[:, :2], c[:, :2]))
     rn = r / r.max() if r.max() > 1e-9 else r
-    hr = np.histogram(np.clip(rn, 0, 0.9999), bins=6, range=(0.0, 1.0))[0].astype(np.float64)
+    hr = _unit_histogram(rn, 6)
     hr /= hr.sum()
     # proportions
     cov = np.cov(c[:, :2].T) if len(c) > 2 else np.eye(2)
