@@ -60,9 +60,10 @@ def test_floor_plan_order_and_relations():
         if cls == "chair" and "around" in kinds:
             assert classes[kinds["around"].target] in ("table", "desk", "coffee table")
             assert kinds["face_to"].target == kinds["around"].target
+            assert kinds["around"].hard and not kinds["face_to"].hard  # the defining relation binds
             chair_targets.append(classes[kinds["around"].target])
         if cls == "nightstand":
-            assert classes[kinds["side_of"].target] == "bed"
+            assert classes[kinds["side_of"].target] == "bed" and kinds["side_of"].hard
         if cls == "coffee table":
             assert classes[kinds["in_front_of"].target] == "couch"
         if cls == "office chair":
@@ -110,6 +111,8 @@ def test_deterministic_and_rng_dependent():
     a = RulePlanner().plan(req, rng=np.random.default_rng(5))
     b = RulePlanner().plan(req, rng=np.random.default_rng(5))
     assert a == b
+    soft = RulePlanner(binding=False).plan(req, rng=np.random.default_rng(5))
+    assert not any(r.hard for it in soft.order for r in it.relations)
     plans = {RulePlanner().plan(req, rng=np.random.default_rng(s)).order for s in range(10)}
     assert len(plans) > 1  # unknown small classes: middle or near a random earlier object
 

@@ -41,11 +41,12 @@ class FloorRule:
     relations: tuple[str, ...] = ()
     seat_width: float = 0.0
     per_anchor: int = 0
+    binding: tuple[str, ...] = ()  # relations (of ``relations``) that are hard: the object's raison d'etre
 
 
 _HUG = FloorRule(0, "edge", hard=True)
 _CHAIR = FloorRule(2, None, anchors=("dining table", "table", "desk", "kitchen counter", "counter", "coffee table"),
-                   relations=("around", "face_to"), seat_width=0.6)
+                   relations=("around", "face_to"), seat_width=0.6, binding=("around",))
 
 FLOOR_RULES: dict[str, FloorRule] = {
     # wall-huggers: backs against a wall, hard
@@ -58,19 +59,22 @@ FLOOR_RULES: dict[str, FloorRule] = {
     # free-standing tables in the middle of the room
     "table": FloorRule(1, "middle"),
     "dining table": FloorRule(1, "middle"),
-    "coffee table": FloorRule(1, "middle", anchors=("sofa",), relations=("in_front_of", "near")),
+    "coffee table": FloorRule(1, "middle", anchors=("sofa",), relations=("in_front_of", "near"),
+                              binding=("in_front_of",)),
     # seating around tables
     "chair": _CHAIR, "stool": _CHAIR, "folded chair": _CHAIR, "seat": _CHAIR,
     "office chair": FloorRule(2, None, anchors=("desk", "table", "dining table"), relations=("in_front_of", "face_to"),
-                              per_anchor=1),
+                              per_anchor=1, binding=("in_front_of",)),
     "armchair": FloorRule(2, None, anchors=("coffee table", "sofa"), relations=("near", "face_to"), per_anchor=2),
     # things beside or in front of furniture
     "nightstand": FloorRule(1, "edge", anchors=("bed",), relations=("side_of", "near", "face_same_as"),
-                            per_anchor=2),
-    "end table": FloorRule(3, None, anchors=("sofa", "armchair", "bed"), relations=("side_of", "near")),
+                            per_anchor=2, binding=("side_of",)),
+    "end table": FloorRule(3, None, anchors=("sofa", "armchair", "bed"), relations=("side_of", "near"),
+                           binding=("side_of",)),
     "tv stand": FloorRule(1, "edge", hard=True, anchors=("sofa", "bed"), relations=("face_to",)),
     "tv": FloorRule(3, "edge", anchors=("sofa", "armchair", "bed"), relations=("face_to",)),
-    "ottoman": FloorRule(3, None, anchors=("armchair", "sofa"), relations=("in_front_of", "near")),
+    "ottoman": FloorRule(3, None, anchors=("armchair", "sofa"), relations=("in_front_of", "near"),
+                         binding=("in_front_of",)),
     "bench": FloorRule(3, None, anchors=("piano", "bed", "dining table"), relations=("in_front_of", "near")),
     "lamp": FloorRule(3, "edge", anchors=("bed", "sofa", "armchair", "desk"), relations=("near", "side_of")),
     "sink": FloorRule(1, "edge", hard=True, anchors=("toilet", "bathtub"), relations=("near",)),
@@ -192,9 +196,12 @@ class RulePlanner:
 
     name = "rules"
 
-    def __init__(self, *, near_prob: float = 0.5):
+    def __init__(self, *, near_prob: float = 0.5, binding: bool = True):
         # probability that an object of an unknown small class is placed near a random earlier object
         self.near_prob = float(near_prob)
+        # make each rule's defining relations (chairs around a table, nightstands beside a bed) hard:
+        # an object that cannot keep them is dropped rather than placed anywhere
+        self.binding = bool(binding)
 
     def plan(self, request: PlanRequest, *, rng: np.random.Generator) -> GroupPlan:
         kind = group_kind(request.group)
@@ -223,7 +230,7 @@ class RulePlanner:
                 rels.append(Relation(rule.place, None, (), rule.hard))
             if anchor is not None:
                 dependents[anchor] += 1
-                rels.extend(Relation(k, anchor) for k in rule.relations)
+                rels.extend(Relation(k, anchor, (), self.binding and k in rule.binding) for k in rule.relations)
             elif rule is None or (rule.place is None and rule.anchors):
                 rels.extend(self._default_floor(rec, pos, rng))
             classes.append(canonical_class(rec.class_name))
