@@ -187,17 +187,58 @@ class SubMConv3d(nn.Module):
                 out = out + self.bias.to(out.dtype)
             return x.replace(out)
         maps = x.cset.submanifold_map(self.kernel_size)
+        if feats.device.type == "cuda" and torch.is_autocast_enabled("cuda"):
+            dt = torch.get_autocast_dtype("cuda")
+            feats, w = feats.to(dt), w.to(dt)
+        out = _SubMConvFn.apply(feats, w, maps)
+        if self.bias is not None:
+            out = out + self.bias.to(out.dtype)
+        return x.replace(out)
+
+
+class _SubMConvFn(torch.autograd.Function):
+    """Gather-matmul-scatter that saves only its input features for backward.
+
+    Plain autograd would keep every offset's gathered ``(M_o, C_in)`` block alive until backward
+    (27 copies of the input for a 3x3x3 kernel); here backward gathers again, so a convolution's
+    saved state is one copy of its input.
+    """
+
+    @staticmethod
+    def forward(ctx, feats: torch.Tensor, weight: torch.Tensor, maps: list) -> torch.Tensor:  # type: ignore[override]
         centre = maps.index(None)
-        out = feats @ w[centre]
+        out = feats @ weight[centre]
         for i, m in enumerate(maps):
             if m is None or m[0].numel() == 0:
                 continue
             in_rows, out_rows = m
-            src = feats[in_rows] @ w[i]
-            out = out.index_add(0, out_rows, src.to(out.dtype))
-        if self.bias is not None:
-            out = out + self.bias.to(out.dtype)
-        return x.replace(out)
+            out.index_add_(0, out_rows, feats[in_rows] @ weight[i])
+        ctx.save_for_backward(feats, weight)
+        ctx.maps = maps
+        return out
+
+    @staticmethod
+    def backward(ctx, grad_out: torch.Tensor):  # type: ignore[override]
+        feats, weight = ctx.saved_tensors
+        maps = ctx.maps
+        centre = maps.index(None)
+        grad_out = grad_out.contiguous()
+        grad_feats = grad_w = None
+        if ctx.needs_input_grad[0]:
+            grad_feats = grad_out @ weight[centre].T
+        if ctx.needs_input_grad[1]:
+            grad_w = torch.zeros_like(weight)
+            grad_w[centre] = feats.T @ grad_out
+        for i, m in enumerate(maps):
+            if m is None or m[0].numel() == 0:
+                continue
+            in_rows, out_rows = m
+            g = grad_out[out_rows]
+            if grad_feats is not None:
+                grad_feats.index_add_(0, in_rows, g @ weight[i].T)
+            if grad_w is not None:
+                grad_w[i] = feats[in_rows].T @ g
+        return grad_feats, grad_w, None
 
 
 class DownConv3d(nn.Module):
