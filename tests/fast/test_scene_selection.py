@@ -164,3 +164,16 @@ def test_on_top_draws_fit_their_support(tmp_path):
     assert drawn == {"t:cup/0", "t:ruler/0"}
     sel = _sel(cat, floor_count=5, wall_count=0, on_top_count=4, on_top_fit=False)
     assert "t:tv/0" in {r.id for items in sel.floor_on_top for r in items}
+
+
+def test_pool_cache_follows_catalog_changes(tmp_path):
+    from assist3d.contracts import MeshData
+
+    cat = _catalog(tmp_path)
+    before = {r.class_name for r in _sel(cat, floor_count=200, wall_count=0, on_top_count=0).floor}
+    assert "hovercraft" not in before
+    mesh = MeshData(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32), np.array([[0, 1, 2]], np.int32),
+                    np.zeros((1, 3), np.uint8))
+    cat.add(_rec("hovercraft", "floor", 0, 0), mesh)
+    after = {r.class_name for r in _sel(cat, floor_count=200, wall_count=0, on_top_count=0).floor}
+    assert "hovercraft" in after  # the cached pools were rebuilt for the changed catalog

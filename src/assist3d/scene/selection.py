@@ -263,8 +263,9 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
                           f"max_classes={cfg.max_classes}); the catalog has {len(catalog.group('floor'))} floor "
                           f"assets in all")
     used: set[str] = set()
-    partners = {g: partner_map(pool.classes, cfg.class_pool_seed, g) if cfg.pairing_prob > 0 else {}
-                for g, pool in pools.items()}
+    partners = {g: _CACHE.get(catalog, ("partners", fkey, g),
+                              lambda pool=pool, g=g: partner_map(pool.classes, cfg.class_pool_seed, g))
+                if cfg.pairing_prob > 0 else {} for g, pool in pools.items()}
 
     real_classes = ({c for pool in pools.values() for c in pool.classes if classes.match(c) is not None}
                     if classes is not None else set())
