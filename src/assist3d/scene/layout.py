@@ -200,7 +200,8 @@ class _Run:
         self.timing[group] = round(time.perf_counter() - t0, 4)
         # map placed instances back to the selected objects (the same asset may be selected twice)
         queue: dict[str, deque[int]] = defaultdict(deque)
-        for src in order + [i for i in range(len(objects)) if i not in set(order)]:
+        in_order = set(order)
+        for src in order + [i for i in range(len(objects)) if i not in in_order]:
             queue[objects[src].id].append(src)
         ids: list[int | None] = [None] * len(objects)
         for inst in result.instances:
