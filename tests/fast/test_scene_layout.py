@@ -246,3 +246,22 @@ def test_cli_layout_and_layout_png(tmp_path):
                                  "--out", str(png2)])
     assert r.exit_code == 0, r.output
     assert png2.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_cli_config_precedence(tmp_path):
+    from assist3d.cli.scene import compose_config
+    from assist3d.errors import ConfigError
+
+    f = tmp_path / "c.yaml"
+    f.write_text("selection: {floor_count: 9}\nllm: {model: from-file}\n", encoding="utf-8")
+    cfg = compose_config(f, "holodeck-style", {"llm": {"model": "from-flag"}})
+    assert cfg.preset == "holodeck-style"
+    assert cfg.selection.floor_count == 9  # the file beats the preset (14)
+    assert cfg.selection.pairing_prob == 1.0  # the preset beats the defaults
+    assert cfg.llm.model == "from-flag"  # the flag beats the file
+    with pytest.raises(ConfigError, match="did you mean"):
+        compose_config(None, "holodek-style", {})
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("- a list\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match="mapping"):
+        compose_config(bad, None, {})
