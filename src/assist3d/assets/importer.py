@@ -87,6 +87,8 @@ def run_import(catalog: Catalog, items: Sequence[Item],
         for item in items:
             handle(item, convert(item))
     else:
+        # the workers are forked (fast start); callers must not run threads that hold locks the
+        # workers need (the CLI's progress bar refreshes from this thread, not its own)
         with ProcessPoolExecutor(max_workers=n_workers) as pool:
             for item, result in zip(items, pool.map(convert, items, chunksize=2)):
                 handle(item, result)

@@ -42,12 +42,16 @@ def _progress_bar(label: str, enabled: bool = True) -> Iterator:
         return
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+    # auto_refresh=False: no refresh thread, so the importers' forked workers never inherit a
+    # console lock held by it; the bar is redrawn on each update instead
     with Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  TextColumn("{task.fields[item]}"), console=_stderr_console(), transient=False) as bar:
+                  TextColumn("{task.fields[item]}"), console=_stderr_console(), transient=False,
+                  auto_refresh=False) as bar:
         task = bar.add_task(label, total=None, item="")
 
         def update(done: int, total: int, name: str) -> None:
             bar.update(task, completed=done, total=total, item=name[:40])
+            bar.refresh()
 
         yield update
 
