@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
 from pathlib import Path
 
 import typer
@@ -42,6 +43,9 @@ def register(app: typer.Typer) -> None:
         if device:
             cfg = cfg.model_copy(update={"device": device})
         cfg = type(cfg).model_validate(cfg.model_dump())
+        if int(os.environ.get("RANK", "0")) != 0:  # torchrun: only rank 0 talks
+            train(cfg, out, resume=resume)
+            return
         with Progress(TextColumn("[bold]train"), BarColumn(), TextColumn("{task.completed}/{task.total} steps"),
                       TextColumn("{task.fields[info]}"), TimeElapsedColumn(), TimeRemainingColumn()) as bar:
             task = bar.add_task("train", total=None, info="")

@@ -273,11 +273,12 @@ def train(cfg: TrainConfig, out_dir: str | Path, *, resume: bool = False, source
             torch.manual_seed(cfg.seed * 1_000_003 + epoch * 101 + info.rank)
             for b in range(0, len(order), bs):
                 ts = time.perf_counter()
+                lr = trainer.optimizer.param_groups[0]["lr"]  # the rate this step uses
                 stats = trainer.step(order[b:b + bs], rng=rng)
                 step += 1
                 loss_t = all_reduce_mean(torch.tensor(stats.loss, device=device), info)
                 last_loss = float(loss_t)
-                row = {"epoch": epoch + 1, "step": step, "lr": trainer.scheduler.get_last_lr()[0], "loss": last_loss,
+                row = {"epoch": epoch + 1, "step": step, "lr": lr, "loss": last_loss,
                        "objectness": stats.objectness, "mask_bce": stats.mask_bce, "dice": stats.dice,
                        "scenes": stats.scenes * info.world_size, "seconds": time.perf_counter() - ts}
                 if info.is_main:
