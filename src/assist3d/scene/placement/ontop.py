@@ -23,7 +23,7 @@ from ..geometry import InstanceBoxes, boxes_collide, pose_xyz_yaw, world_bounds
 from .common import Item, RelationState, order_candidates, target_box
 from .scoring import Candidates
 from .search import Choice
-from .surface import surface_map
+from .surface import MeshTriangles, surface_map
 
 EPS = 1e-6
 
@@ -70,7 +70,7 @@ class OnTopProblem:
         self.yaw_offset = rng.uniform(0.0, step, size=self.n)
         self.cap = cfg.max_on_top_per_support
         self.avoidable_after = np.zeros(self.n + 1, dtype=np.int64)  # avoidable items in k..n-1
-        tri = support_mesh.vertices.astype(np.float64)[support_mesh.faces]
+        tri = MeshTriangles(support_mesh)
         self.maps = [surface_map(map_key + (i,), support_mesh, surf, poly, tri)
                      for i, (surf, poly) in enumerate(zip(self.surfaces, self.polys))]
         self._forced: list[str | None] = [None] * self.n

@@ -102,10 +102,11 @@ def _window_sums(sat: np.ndarray, ex: int, ey: int) -> np.ndarray:
     """(ny, nx) number of True cells in the (2 ey + 1) x (2 ex + 1) window around each cell, from
     the summed-area table ``sat`` (ny + 1, nx + 1) of the mask (cells beyond it count as False)."""
     ny, nx = sat.shape[0] - 1, sat.shape[1] - 1
-    i0 = np.clip(np.arange(nx) - ex, 0, nx)
-    i1 = np.clip(np.arange(nx) + ex + 1, 0, nx)
-    j0 = np.clip(np.arange(ny) - ey, 0, ny)[:, None]
-    j1 = np.clip(np.arange(ny) + ey + 1, 0, ny)[:, None]
+    ci, cj = np.arange(nx), np.arange(ny)
+    i0 = np.maximum(ci - ex, 0)
+    i1 = np.minimum(ci + ex + 1, nx)
+    j0 = np.maximum(cj - ey, 0)[:, None]
+    j1 = np.minimum(cj + ey + 1, ny)[:, None]
     return sat[j1, i1] - sat[j0, i1] - sat[j1, i0] + sat[j0, i0]
 
 
@@ -159,10 +160,24 @@ def _vertical_hits(tri: np.ndarray, gx: np.ndarray, gy: np.ndarray) -> tuple[np.
     return (jj * nx + ii)[inside], z[inside]
 
 
+class MeshTriangles:
+    """A mesh's triangles (t, 3, 3) float64 and their bounds, built on first use."""
+
+    def __init__(self, mesh: MeshData):
+        self.mesh = mesh
+        self._tri: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def get(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if self._tri is None:
+            tri = self.mesh.vertices.astype(np.float64)[self.mesh.faces]
+            self._tri = (tri, tri.min(1), tri.max(1))
+        return self._tri
+
+
 def surface_map(key: tuple, mesh: MeshData, surf: SupportSurface, poly: shapely.Polygon,
-                triangles: np.ndarray | None = None) -> SurfaceMap:
-    """The (cached) map of ``surf`` (polygon ``poly``) on ``mesh`` (asset frame); ``triangles``
-    (t, 3, 3) float64 may pass ``mesh.vertices[mesh.faces]`` when several surfaces share a mesh."""
+                triangles: MeshTriangles | None = None) -> SurfaceMap:
+    """The (cached) map of ``surf`` (polygon ``poly``) on ``mesh`` (asset frame); pass one
+    ``triangles`` for all surfaces of a mesh so its triangles are gathered once."""
     with _LOCK:
         hit = _CACHE.get(key)
         if hit is not None:
@@ -176,8 +191,7 @@ def surface_map(key: tuple, mesh: MeshData, surf: SupportSurface, poly: shapely.
     shape = (len(gy), len(gx))
     n = shape[0] * shape[1]
     h = float(surf.height)
-    tri = mesh.vertices.astype(np.float64)[mesh.faces] if triangles is None else triangles
-    tlo, thi = tri.min(1), tri.max(1)
+    tri, tlo, thi = (triangles or MeshTriangles(mesh)).get()
     near = ((thi[:, 0] >= gx[0]) & (tlo[:, 0] <= gx[-1]) & (thi[:, 1] >= gy[0]) & (tlo[:, 1] <= gy[-1])
             & (thi[:, 2] >= h - LIFT))
     cell, z = _vertical_hits(tri[near], gx, gy)
