@@ -38,7 +38,7 @@ for p in $PRESETS; do
 done
 
 start=$(date +%s)
-"$ASSIST3D" metrics "${DATASETS[@]}" "${ASSET_ARGS[@]}" --json --plot "$OUT/metrics.png" --save-codebook "$OUT/codebook.npz" \
+"$ASSIST3D" metrics "${DATASETS[@]}" --json --plot "$OUT/metrics.png" --save-codebook "$OUT/codebook.npz" \
   > "$OUT/metrics.json"
 echo "metrics: $(( $(date +%s) - start )) s -> $OUT/metrics.json, $OUT/metrics.png" >&2
 cat "$OUT/metrics.json"

@@ -61,7 +61,7 @@ def _dataset_catalog(root: Path, assets: str | None) -> Catalog | None:
         m = json.loads(manifest.read_text())
     except (OSError, json.JSONDecodeError) as e:
         raise DataError(f"{manifest}: unreadable manifest ({e})") from None
-    path = m.get("catalog")
+    path = m.get("catalog") or m.get("assets")  # `assist3d generate` writes the catalog folder as "assets"
     if isinstance(path, dict):
         path = path.get("path")
     if path and Catalog.exists(path):

@@ -1,0 +1,84 @@
+"""Dataset summaries: a generated-format dataset finds the catalog its manifest names, scores its
+layouts, and fills every metric of the JSON contract; the Holodeck-style library size covers
+every procedural family."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import trimesh
+
+from assist3d.assets.catalog import Catalog
+from assist3d.contracts import AssetRecord, MeshData, PlacedInstance, Room, SceneLayout
+from assist3d.metrics.plausibility import score_layout
+from assist3d.metrics.report import metrics_table, shared_codebook, summarize_dataset
+
+
+def _pose(x, y, z=0.0):
+    p = np.eye(4)
+    p[:3, 3] = (x, y, z)
+    return p
+
+
+def _write_dataset(root, catalog_dir, layouts):
+    cat = Catalog.open_or_create(catalog_dir)
+    for aid, size in (("box", (0.6, 0.4, 0.8)), ("tall", (0.3, 0.3, 1.6))):
+        m = trimesh.creation.box(size)
+        m.apply_translation((0, 0, size[2] / 2))
+        cat.add(AssetRecord(id=aid, source="test", name=aid, class_name=aid, groups=("floor",), size=size),
+                MeshData(m.vertices.astype(np.float32), m.faces.astype(np.int32),
+                         np.full((len(m.faces), 3), 150, np.uint8)))
+    cat.save()
+    root.mkdir()
+    rng = np.random.default_rng(0)
+    for k, layout in enumerate(layouts):
+        d = root / f"scene_{k:06d}"
+        d.mkdir()
+        coords, inst = [], []
+        for i in layout.instances:
+            size = cat.get(i.asset).size
+            pts, _ = trimesh.sample.sample_surface(trimesh.creation.box(size), 400, seed=int(rng.integers(1 << 30)))
+            coords.append(pts + i.pose[:3, 3] + (0, 0, size[2] / 2))
+            inst.append(np.full(400, i.id))
+        coord = np.concatenate(coords).astype(np.float32)
+        np.save(d / "coord.npy", coord)
+        np.save(d / "instance.npy", np.concatenate(inst).astype(np.int32))
+        np.save(d / "segment.npy", np.zeros(len(coord), np.int32))
+        (d / "layout.json").write_text(json.dumps(layout.to_json()))
+        (d / "meta.json").write_text("{}")
+    # `assist3d generate` records the catalog folder under "assets"
+    (root / "manifest.json").write_text(json.dumps({"format": "assist3d-dataset", "assets": str(catalog_dir)}))
+    return cat
+
+
+def test_generated_dataset_summary_uses_manifest_catalog(tmp_path):
+    room = Room(((0, 0), (4, 0), (4, 3), (0, 3)), 2.6, ())
+    layouts = [
+        SceneLayout(room, (PlacedInstance(1, "box", "box", "floor", _pose(1, 1)),
+                           PlacedInstance(2, "tall", "tall", "floor", _pose(3, 2))), (), seed=0, seconds=0.0),
+        # the second scene floats its box: a lower layout score
+        SceneLayout(room, (PlacedInstance(1, "box", "box", "floor", _pose(1, 1, 0.5)),), (), seed=1, seconds=0.0),
+    ]
+    cat = _write_dataset(tmp_path / "ds", tmp_path / "lib", layouts)
+    s = summarize_dataset(str(tmp_path / "ds"))
+    assert s.scenes == 2 and s.instances == 3 and s.features.shape[0] == 3
+    assert s.scene_classes == [{"box", "tall"}, {"box"}]
+    expected = [score_layout(lay, cat).score for lay in layouts]
+    assert s.layout_scores == expected and expected[1] < expected[0]
+    row = metrics_table([s], shared_codebook([s], seed=0))[f"assist3d:{tmp_path / 'ds'}"]
+    assert set(row) >= {"geometry_diversity", "context_complexity", "layout_score", "scenes", "instances"}
+    assert row["layout_score"] == round(float(np.mean(expected)), 2)
+    # box: P(tall | box) = 1/2; tall: P(box | tall) = 1
+    assert row["context_complexity"] == 0.75
+    assert 0 <= row["geometry_diversity"] <= math.log(row["codes"]) + 1e-3
+
+
+def test_holodeck_library_covers_every_family():
+    from assist3d.assets.procedural import FAMILIES
+    from assist3d.presets import HOLODECK_ASSETS, apply_preset
+
+    assert apply_preset({}, "holodeck-style").assets.procedural_count == HOLODECK_ASSETS
+    # the first len(FAMILIES) procedural assets cover each family once: no household class is lost
+    assert HOLODECK_ASSETS >= len(FAMILIES)
