@@ -8,12 +8,14 @@
 # Environment:
 #   FIT_SOURCE=toy|generate   toy (default): 4 box-room scenes from assist3d.engine.toy in the
 #                             Pointcept layout; generate: `assist3d generate --num-scenes 4`.
+#   FIT_CONFIG=FILE           training config (default: configs/small-cpu.yaml for toy,
+#                             configs/small-cpu-generated.yaml for generate).
 #   FIT_EPOCHS=N              override the preset's epochs.
 #   REAL_SCAN=PATH            the real scan (default ../shared/data/real/scannet_scene0451_01.npy).
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
-WORK="${1:-$ROOT/runs/fit_small}"
+WORK="${1:-${TMPDIR:-/tmp}/assist3d_fit_small}"
 PY="${PYTHON:-$ROOT/.venv/bin/python}"
 A3D="$PY -m assist3d"
 SOURCE="${FIT_SOURCE:-toy}"
@@ -30,16 +32,18 @@ case "$SOURCE" in
 write_toy_dataset('$WORK/scenes', 4, seed=1, num_objects=6, room_m=4.0, density_per_m2=1000)"
     SPEC="synthetic=pointcept:$WORK/scenes"
     GT="pointcept:$WORK/scenes"
+    CONFIG="${FIT_CONFIG:-$ROOT/configs/small-cpu.yaml}"
     ;;
   generate)
     $A3D generate --out "$WORK/scenes" --num-scenes 4
     SPEC="synthetic=assist3d:$WORK/scenes"
     GT="assist3d:$WORK/scenes"
+    CONFIG="${FIT_CONFIG:-$ROOT/configs/small-cpu-generated.yaml}"
     ;;
   *) echo "FIT_SOURCE must be toy or generate, got $SOURCE" >&2; exit 2 ;;
 esac
 
-$A3D train --config "$ROOT/configs/small-cpu.yaml" --data "$SPEC" --out "$WORK/train" ${EPOCH_ARGS[@]+"${EPOCH_ARGS[@]}"}
+$A3D train --config "$CONFIG" --data "$SPEC" --out "$WORK/train" ${EPOCH_ARGS[@]+"${EPOCH_ARGS[@]}"}
 CKPT="$WORK/train/last.pt"
 trained=$(date +%s)
 
