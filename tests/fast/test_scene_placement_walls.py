@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import shapely
 
 from assist3d.config import LayoutConfig
 from assist3d.contracts import PlacedInstance, Relation
