@@ -160,7 +160,7 @@ def relation_score(kind: str, c: Candidates, target: TargetBox | None, value: tu
             return np.zeros(n)
         return _lin(np.nan_to_num(c.wall_clear, nan=0.0), 0.0, 1.0)
     if kind == "height":
-        lo, hi = (value + (0.0, 10.0))[:2] if len(value) < 2 else value[:2]
+        lo, hi = (float(value[0]), float(value[1])) if len(value) >= 2 else (0.0, np.inf)
         out = np.maximum(lo - c.z, c.z - hi)
         return 1.0 - _lin(np.maximum(out, 0.0), 0.0, 0.5)
     if target is None:
