@@ -244,3 +244,13 @@ def test_degenerate_room_is_a_clear_placement_error(catalog):
     req = PlanRequest("floor", (catalog.get("box00"),), room)
     with pytest.raises(PlacementError, match="not a simple polygon"):
         place_group(req, plan(req), catalog, cfg=LayoutConfig(), rng=np.random.default_rng(0), next_id=1)
+
+
+def test_height_above_and_wall_relations_scores():
+    sofa = TargetBox(2.0, 2.5, 0.0, 2.0, 0.9, 0.0, 0.8)
+    c = Candidates(np.array([2.5, 2.5, 4.0, 2.5]), np.array([2.98, 2.98, 2.98, 2.98]), np.zeros(4),
+                   np.array([1.2, 0.2, 1.2, 0.5]), (0.6, 0.04, 0.5), back_gap=np.array([0.0, 0.0, 0.0, 2.0]))
+    assert relation_score("height", c, None, (1.0, 1.6)).tolist() == [1.0, 0.0, 1.0, 1.0 - 0.5 / 0.5]
+    above = relation_score("above", c, sofa)
+    assert above[0] > 0.95 and above[1] == 0.0 and above[2] < above[0]  # over it / below its top / beside it
+    assert relation_score("edge", c, None).tolist()[:3] == [1.0, 1.0, 1.0] and relation_score("edge", c, None)[3] == 0.0
