@@ -221,21 +221,29 @@ class InstanceBoxes:
     FIELDS = ("x", "y", "yaw", "hw", "hd", "z0", "z1", "hx", "hy", "ids")
 
     def __init__(self) -> None:
-        self._rows: list[tuple[float, ...]] = []
+        self._base = np.zeros((0, len(self.FIELDS)))  # boxes given at once (from_arrays)
+        self._rows: list[tuple[float, ...]] = []  # boxes added one by one
         self._arrays: dict[str, np.ndarray] | None = None
 
     @classmethod
     def from_instances(cls, instances: tuple[PlacedInstance, ...] | list[PlacedInstance],
                        sizes: dict[str, tuple[float, float, float]]) -> "InstanceBoxes":
-        boxes = cls()
-        for inst in instances:
-            boxes.add_pose(inst.id, sizes[inst.asset], inst.pose)
-        return boxes
+        if not instances:
+            return cls()
+        poses = np.stack([inst.pose for inst in instances])
+        size = np.array([sizes[inst.asset] for inst in instances], dtype=np.float64).reshape(-1, 3)
+        yaw = np.arctan2(poses[:, 1, 0], poses[:, 0, 0])
+        hx, hy = rotated_half_extents(size[:, 0], size[:, 1], yaw)
+        z = poses[:, 2, 3]
+        cols = {"x": poses[:, 0, 3], "y": poses[:, 1, 3], "yaw": yaw, "hw": size[:, 0] / 2, "hd": size[:, 1] / 2,
+                "z0": z, "z1": z + size[:, 2], "hx": hx, "hy": hy,
+                "ids": np.array([inst.id for inst in instances], dtype=np.float64)}
+        return cls.from_arrays(cols)
 
     @classmethod
     def from_arrays(cls, columns: dict[str, np.ndarray]) -> "InstanceBoxes":
         boxes = cls()
-        boxes._rows = [tuple(float(v) for v in row) for row in zip(*(columns[k] for k in cls.FIELDS))]
+        boxes._base = np.stack([np.asarray(columns[k], dtype=np.float64) for k in cls.FIELDS], 1)
         return boxes
 
     def add(self, ident: int, x: float, y: float, yaw: float, z: float, size: tuple[float, float, float]) -> None:
@@ -249,17 +257,20 @@ class InstanceBoxes:
         self.add(ident, x, y, yaw, z, size)
 
     def pop(self) -> None:
+        """Remove the box added last with :meth:`add`."""
         self._rows.pop()
         self._arrays = None
 
     def __len__(self) -> int:
-        return len(self._rows)
+        return len(self._base) + len(self._rows)
 
     @property
     def a(self) -> dict[str, np.ndarray]:
         """The columns as (n,) float64 arrays (cached until the next change)."""
         if self._arrays is None:
             data = np.array(self._rows, dtype=np.float64).reshape(-1, len(self.FIELDS))
+            if len(self._base):
+                data = np.concatenate([self._base, data])
             self._arrays = {k: data[:, i] for i, k in enumerate(self.FIELDS)}
         return self._arrays
 
