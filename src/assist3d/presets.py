@@ -26,10 +26,6 @@ HOUSEHOLD_CLASSES = [
     "book", "vase", "cup", "bowl", "plate", "bottle", "pillow", "monitor", "keyboard", "laptop",
 ]
 
-# Size of the procedural library a Holodeck-style run draws from (the first assets cover every
-# family once; see assist3d.assets.procedural).
-HOLODECK_ASSETS = 200
-
 PRESETS: dict[str, dict] = {
     # ASSIST-3D as in the paper: random heterogeneous selection, relations + depth-first search,
     # rendered RGB-D fusion. Half the scenes use the complementary real-class strategy.
@@ -41,12 +37,8 @@ PRESETS: dict[str, dict] = {
         "selection": {"floor_count": 40, "wall_count": 0, "on_top_count": 0, "complementary_fraction": 0.0},
     },
     # Holodeck-style: common household classes paired with their typical neighbours, few objects,
-    # relation-guided placement. Holodeck retrieves the best-matching asset for each object an LLM
-    # names, so it keeps reusing the same few models: with the built-in procedural library it
-    # draws from a 200-asset library (a prefix of the full one: about one model per family).
-    # An explicit catalog (--assets) is used whole.
+    # relation-guided placement.
     "holodeck-style": {
-        "assets": {"procedural_count": HOLODECK_ASSETS},
         "selection": {"floor_count": 14, "wall_count": 4, "on_top_count": 2, "allowed_classes": HOUSEHOLD_CLASSES,
                       "pairing_prob": 1.0, "complementary_fraction": 0.0},
     },
