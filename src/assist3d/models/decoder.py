@@ -118,7 +118,7 @@ class MaskDecoder(nn.Module):
 
     def _attn_mask(self, masks: torch.Tensor, level_index: torch.Tensor, n_level: int,
                    keep: torch.Tensor | None) -> torch.Tensor:
-        """Boolean ``(heads, Q, K)`` mask, True = blocked, from the current mask logits pooled to the level."""
+        """Boolean ``(Q, K)`` mask (shared by the heads), True = blocked, from the mask logits pooled to the level."""
         prob = masks.detach().sigmoid()
         pooled = prob.new_zeros((n_level, prob.shape[1])).index_add_(0, level_index, prob)
         count = torch.bincount(level_index, minlength=n_level).clamp(min=1).to(prob.dtype)
@@ -127,7 +127,7 @@ class MaskDecoder(nn.Module):
             pooled = pooled[keep]
         blocked = (pooled < 0.5).T  # (Q, K)
         blocked[blocked.all(1)] = False
-        return blocked[None].expand(self.heads, -1, -1)
+        return blocked
 
     def forward(self, scene: SceneLevels) -> list[LayerPrediction]:
         """All predictions for one scene: the initial one, then one per layer (the last is final)."""
