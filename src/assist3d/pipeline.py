@@ -28,6 +28,9 @@ from .rng import make_rng, scene_seed
 
 log = logging.getLogger(__name__)
 
+# LLM accounting copied from layout stats into each scene's marker and summed in the manifest
+LLM_STAT_KEYS = ("llm_calls", "cache_hits", "repairs", "prompt_tokens", "completion_tokens", "llm_seconds")
+
 __all__ = ["STAGES", "scene_name", "SceneJob", "Generator", "generate_dataset", "DatasetRun", "run_benchmark"]
 
 STAGES = ("select", "layout", "assemble", "render", "fuse", "write")
@@ -102,6 +105,7 @@ class Generator:
             "dropped": len(layout.dropped), "planner": dict(layout.planner),
             "vantage_points": [[round(float(v), 6) for v in c] for c in res.centers],
             "render": res.stats, "triangles": int(len(mesh.faces)),
+            "llm": {k: layout.stats[k] for k in LLM_STAT_KEYS if isinstance(layout.stats.get(k), (int, float))},
         }
         if job.verify:
             t0 = time.perf_counter()

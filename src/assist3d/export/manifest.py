@@ -14,7 +14,7 @@ from ..fileio import write_json_atomic
 
 log = logging.getLogger(__name__)
 
-__all__ = ["MANIFEST_NAME", "versions", "scene_entry", "Manifest", "IGNORED_CONFIG_KEYS"]
+__all__ = ["MANIFEST_NAME", "versions", "scene_entry", "llm_summary", "Manifest", "IGNORED_CONFIG_KEYS"]
 
 MANIFEST_NAME = "manifest.json"
 # settings that change speed or extra files, never the arrays: a resume may change them
@@ -36,8 +36,26 @@ def versions() -> dict[str, str]:
 
 def scene_entry(meta: dict) -> dict:
     """The manifest entry of a scene, from its completion marker."""
-    keys = ("id", "index", "seed", "instances", "points", "seconds", "dropped", "planner", "check")
+    keys = ("id", "index", "seed", "instances", "points", "seconds", "dropped", "planner", "llm", "check")
     return {k: meta[k] for k in keys if k in meta}
+
+
+def llm_summary(scenes: list[dict]) -> dict:
+    """Dataset totals of the LLM planner: models used, calls, cache hits, repairs, tokens, seconds,
+    and how many groups each planner produced."""
+    models = sorted({p.split(":", 1)[1] for e in scenes for p in (e.get("planner") or {}).values()
+                     if isinstance(p, str) and p.startswith("llm:")})
+    groups: dict[str, int] = {}
+    for e in scenes:
+        for p in (e.get("planner") or {}).values():
+            key = "llm" if isinstance(p, str) and p.startswith("llm:") else str(p)
+            groups[key] = groups.get(key, 0) + 1
+    totals: dict[str, float] = {}
+    for e in scenes:
+        for k, v in (e.get("llm") or {}).items():
+            totals[k] = totals.get(k, 0) + v
+    return {"models": models, "groups_by_planner": groups,
+            **{k: (round(v, 3) if isinstance(v, float) else v) for k, v in sorted(totals.items())}}
 
 
 def _comparable(cfg: dict) -> dict:
@@ -85,6 +103,7 @@ class Manifest:
 
     def write(self) -> None:
         self.data["scenes"] = [self._entries[k] for k in sorted(self._entries)]
+        self.data["llm"] = llm_summary(self.data["scenes"])
         write_json_atomic(self.path, self.data)
 
     @property
