@@ -207,3 +207,24 @@ def test_train_cli_requires_data(tmp_path):
     cfg.write_text("optim: {epochs: 1}\n")
     res = CliRunner().invoke(app, ["train", "--config", str(cfg), "--out", str(tmp_path / "o")])
     assert res.exit_code != 0 and "no training data" in str(res.exception)
+
+
+def test_predict_cli_writes_evaluation_format(tmp_path):
+    from typer.testing import CliRunner
+
+    from assist3d.cli import app
+    from assist3d.engine.toy import write_pointcept_scene
+
+    scenes = _scenes(2)
+    for s in scenes:
+        write_pointcept_scene(tmp_path / "data" / s.scene_id, s)
+    cfg = parse_train_config({**TINY, "optim": {**TINY["optim"], "epochs": 1}})
+    train(cfg, tmp_path / "run", source=MemorySource(scenes))
+    res = CliRunner().invoke(app, ["predict", "--checkpoint", str(tmp_path / "run" / "last.pt"), "--data",
+                                   f"pointcept:{tmp_path / 'data'}", "--out", str(tmp_path / "pred"),
+                                   "--top-k", "5", "--device", "cpu"])
+    assert res.exit_code == 0, res.output
+    for s in scenes:
+        with np.load(tmp_path / "pred" / f"{s.scene_id}.npz") as z:
+            assert z["masks"].dtype == np.bool_ and z["masks"].shape[1] == len(s)
+            assert z["scores"].dtype == np.float32 and len(z["scores"]) == len(z["masks"]) <= 5

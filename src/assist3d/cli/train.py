@@ -69,15 +69,14 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Write <scene_id>.npz (masks bool [M, N], scores float32 [M]) for every scene; score them with evaluate."""
         _require_torch()
-        from ..engine.predict import load_model, predict_dataset
+        from ..engine.predict import predict_dataset
 
-        _, cfg, _ = load_model(checkpoint, "cpu")
-        pcfg = cfg.predict
+        overrides: dict = {}
         if top_k > 0:
-            pcfg = pcfg.model_copy(update={"top_k": top_k})
+            overrides["top_k"] = top_k
         if dbscan is not None:
-            pcfg = pcfg.model_copy(update={"dbscan": dbscan})
-        files = predict_dataset(checkpoint, data, out, device=device, predict_cfg=pcfg)
+            overrides["dbscan"] = dbscan
+        files = predict_dataset(checkpoint, data, out, device=device, overrides=overrides)
         typer.echo(json.dumps({"out": str(out), "scenes": len(files)}))
 
     @app.command("model-bench")

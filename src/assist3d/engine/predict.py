@@ -117,13 +117,16 @@ def load_model(checkpoint: str | Path, device: str = "auto") -> tuple[torch.nn.M
 
 
 def predict_dataset(checkpoint: str | Path, spec: str, out_dir: str | Path, *, device: str = "auto",
-                    predict_cfg: PredictConfig | None = None,
+                    overrides: dict | None = None,
                     on_scene: Callable[[str, int, int], None] | None = None) -> list[Path]:
-    """Write ``<scene_id>.npz`` for every scene of ``spec`` into ``out_dir``; returns the files written."""
+    """Write ``<scene_id>.npz`` for every scene of ``spec`` into ``out_dir``; returns the files written.
+
+    ``overrides``: :class:`PredictConfig` fields replacing the checkpoint config's (e.g. ``{"top_k": 50}``).
+    """
     from .scenes import open_spec
 
     model, cfg, dev = load_model(checkpoint, device)
-    pcfg = predict_cfg or cfg.predict
+    pcfg = PredictConfig.model_validate({**cfg.predict.model_dump(), **(overrides or {})})
     ds = open_spec(spec)
     out = Path(out_dir)
     written = []
