@@ -22,9 +22,10 @@ class FourierEncoding(nn.Module):
         self.register_buffer("B", torch.randn(3, dim // 2, generator=gen) * scale)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        """``x`` (N, 3) float in [0, 1] -> (N, dim)."""
-        proj = 2 * math.pi * (x.to(self.B.dtype) @ self.B)
-        return torch.cat([proj.sin(), proj.cos()], dim=-1)
+        """``x`` (N, 3) float in [0, 1] -> (N, dim) float32 (computed outside autocast: bf16 would blur it)."""
+        with torch.autocast(device_type=x.device.type, enabled=False):
+            proj = 2 * math.pi * (x.float() @ self.B.float())
+            return torch.cat([proj.sin(), proj.cos()], dim=-1)
 
 
 def normalise_coords(xyz: torch.Tensor, lo: torch.Tensor, hi: torch.Tensor) -> torch.Tensor:

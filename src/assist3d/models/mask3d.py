@@ -55,7 +55,7 @@ class Mask3D(nn.Module):
         results: list[list[LayerPrediction]] = []
         for b in range(batch_size):
             s, e = full_rows[b]
-            xyz = full.coords[s:e, 1:].to(mask_feats.dtype)
+            xyz = full.coords[s:e, 1:].float()  # float32 even under autocast: voxel indices reach the hundreds
             lo, hi = xyz.min(0).values, xyz.max(0).values + 1
             lfeats, lpos, lidx = [], [], []
             for lv, f in zip(out.levels, level_feats):

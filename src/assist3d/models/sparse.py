@@ -219,10 +219,13 @@ class _SubMConvFn(torch.autograd.Function):
 
     @staticmethod
     def backward(ctx, grad_out: torch.Tensor):  # type: ignore[override]
-        feats, weight = ctx.saved_tensors
+        feats, weight_in = ctx.saved_tensors
         maps = ctx.maps
         centre = maps.index(None)
-        grad_out = grad_out.contiguous()
+        # autocast may have run the forward matmuls in a lower precision than the inputs: do the
+        # backward in the features' dtype and hand each gradient back in its input's dtype
+        weight = weight_in.to(feats.dtype)
+        grad_out = grad_out.to(feats.dtype).contiguous()
         grad_feats = grad_w = None
         if ctx.needs_input_grad[0]:
             grad_feats = grad_out @ weight[centre].T
@@ -238,6 +241,8 @@ class _SubMConvFn(torch.autograd.Function):
                 grad_feats.index_add_(0, in_rows, g @ weight[i].T)
             if grad_w is not None:
                 grad_w[i] = feats[in_rows].T @ g
+        if grad_w is not None:
+            grad_w = grad_w.to(weight_in.dtype)
         return grad_feats, grad_w, None
 
 
