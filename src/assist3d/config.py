@@ -93,8 +93,13 @@ class LayoutConfig(_Section):
     clearance: float = Field(0.02, ge=0, description="Minimum gap between objects, m.")
     door_clearance: float = Field(0.8, ge=0, description="Free depth kept in front of doors, m.")
     front_clearance: float = Field(0.3, ge=0, description="An object's front must be this far from walls, m.")
-    group_budget_s: float = Field(1.0, gt=0, description="Time budget of the depth-first search per group, s.")
+    group_budget_s: float = Field(4.0, gt=0, description="Wall-clock safety net of the search per group, s. The "
+                                                       "deterministic limits below end the search long before it in "
+                                                       "practice; if it ever binds, the layout depends on machine load "
+                                                       "and a warning says so.")
     max_backtracks: int = Field(2000, ge=0, description="Backtracking steps per group before giving up.")
+    max_nodes: int = Field(2000, ge=1, description="Candidate evaluations per group before backtracking stops "
+                                                   "(deterministic work budget; a 100-object floor group needs ~500).")
     max_on_top_per_support: int = Field(5, ge=0, description="On-top objects placed per support at most.")
     max_branch: int = Field(3, ge=1, description="Positions tried per object when the search backtracks: the best "
                                                  "one, then spread-out alternatives (paper: every valid cell; n/a).")

@@ -173,13 +173,27 @@ def test_search_respects_its_time_budget(catalog):
     ids = [f"box{i:02d}" for i in range(len(SIZES))] * 6
     rel = {k: [Relation("near", k - 1, hard=True), Relation("far", max(k - 3, 0), hard=True)]
            for k in range(1, len(ids))}
-    cfg = LayoutConfig(group_budget_s=0.3, max_backtracks=10**9, patience=10**9, max_branch=6)
+    cfg = LayoutConfig(group_budget_s=0.3, max_backtracks=10**9, patience=10**9, max_branch=6, max_nodes=10**9)
     t0 = time.perf_counter()
     _, res = _place(catalog, room, ids, rel, cfg=cfg)
     assert time.perf_counter() - t0 < 0.3 + 1.5
     assert res.stats["stop"] == "budget" and res.stats["budget_hit"]
     assert len(res.instances) + len(res.dropped) == len(ids)
     assert all(d.reason for d in res.dropped)
+
+
+def test_node_budget_stops_the_same_search_deterministically(catalog):
+    # The same pathological group, bounded by candidate evaluations instead of the clock: it stops
+    # at the same node count with the same layout every time, whatever the machine load.
+    room = rect_room(3.0, 3.0)
+    ids = [f"box{i:02d}" for i in range(len(SIZES))] * 6
+    rel = {k: [Relation("near", k - 1, hard=True), Relation("far", max(k - 3, 0), hard=True)]
+           for k in range(1, len(ids))}
+    cfg = LayoutConfig(group_budget_s=60.0, max_backtracks=10**9, patience=10**9, max_branch=6, max_nodes=300)
+    runs = [_place(catalog, room, ids, rel, cfg=cfg)[1] for _ in range(2)]
+    assert all(r.stats["stop"] == "nodes" and not r.stats["budget_hit"] for r in runs)
+    assert runs[0].stats["nodes"] == runs[1].stats["nodes"] <= 300 + len(ids)
+    assert [i.to_json() for i in runs[0].instances] == [i.to_json() for i in runs[1].instances]
 
 
 def test_backtracking_beats_greedy(catalog):

@@ -114,7 +114,12 @@ def place_group(request: PlanRequest, plan: GroupPlan, catalog: Catalog, *, cfg:
         mesh = catalog.load_mesh(sup_rec)
         problem = OnTopProblem(request.room, items, support, sup_rec.supports, request.placed, sizes, cfg, rng,
                                cfg.max_branch, mesh, (str(catalog.root), sup_rec.id, sup_rec.mesh_file))
-    result = depth_first(problem, max_backtracks=cfg.max_backtracks, patience=cfg.patience, budget_s=cfg.group_budget_s)
+    result = depth_first(problem, max_backtracks=cfg.max_backtracks, patience=cfg.patience, budget_s=cfg.group_budget_s,
+                         max_nodes=cfg.max_nodes)
+    if result.stats.get("budget_hit"):
+        log.warning("layout group %s stopped on the wall-clock budget (layout.group_budget_s = %.1f s): this layout "
+                    "depends on machine load and may differ on a re-run; raise the budget for reproducible output",
+                    request.group, cfg.group_budget_s)
     parent = _support(request).id if kind == "on" else None  # type: ignore[union-attr]
     item_ids: dict[int, int] = {}
     for k, ch in enumerate(result.choices):

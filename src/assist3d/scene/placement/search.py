@@ -17,7 +17,8 @@ object (conflict-directed; this makes each backtrack cost a few nodes). An objec
 placed even in the empty scene is dropped up front and never causes backtracking.
 
 Bounds, all deterministic except the wall-clock safety net: ``max_backtracks`` alternatives in
-all, ``patience`` alternatives without an improvement, ``budget_s`` seconds.
+all, ``patience`` alternatives without an improvement, ``max_nodes`` candidate evaluations (the
+greedy first descent always completes), and ``budget_s`` seconds as a safety net only.
 """
 
 from __future__ import annotations
@@ -84,7 +85,8 @@ class _Frame:
     prev_probe: int | None = None
 
 
-def depth_first(problem: SearchProblem, *, max_backtracks: int, patience: int, budget_s: float) -> SearchResult:
+def depth_first(problem: SearchProblem, *, max_backtracks: int, patience: int, budget_s: float,
+                max_nodes: int | None = None) -> SearchResult:
     """Run the bounded depth-first search; always returns a complete layout (the best found)."""
     t0 = time.perf_counter()
     n = problem.n
@@ -150,6 +152,9 @@ def depth_first(problem: SearchProblem, *, max_backtracks: int, patience: int, b
                 since_best += 1
                 if backtracks > max_backtracks or since_best > patience:
                     stop_reason = "backtracks" if backtracks > max_backtracks else "patience"
+                    break
+                if max_nodes is not None and nodes >= max_nodes:
+                    stop_reason = "nodes"
                     break
                 if time.perf_counter() - t0 > budget_s:
                     stop_reason = "budget"
