@@ -105,7 +105,8 @@ class Generator:
             "dropped": len(layout.dropped), "planner": dict(layout.planner),
             "vantage_points": [[round(float(v), 6) for v in c] for c in res.centers],
             "render": res.stats, "triangles": int(len(mesh.faces)),
-            "llm": {k: layout.stats[k] for k in LLM_STAT_KEYS if isinstance(layout.stats.get(k), (int, float))},
+            "llm": {k: v for k, v in ((k, layout.stats.get(k, (layout.stats.get("timing") or {}).get(k)))
+                                      for k in LLM_STAT_KEYS) if isinstance(v, (int, float))},
         }
         if job.verify:
             t0 = time.perf_counter()

@@ -38,7 +38,7 @@ from .selection import Selection, select_objects
 log = logging.getLogger(__name__)
 
 MAX_NOTES = 50
-SUMMED_PLAN_STATS = ("llm_calls", "cache_hits", "repairs", "prompt_tokens", "completion_tokens")
+SUMMED_PLAN_STATS = ("llm_calls", "cache_hits", "repairs", "prompt_tokens", "completion_tokens", "llm_seconds")
 
 
 def _placement_api() -> tuple[Callable, Callable]:
@@ -256,6 +256,8 @@ def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_inde
     for k in ("prompt_tokens", "completion_tokens"):
         if k in run.plan_stats:
             stats[k] = int(run.plan_stats[k])
+    if run.plan_stats.get("llm_seconds"):
+        run.timing["llm_seconds"] = round(float(run.plan_stats["llm_seconds"]), 4)  # wall time: kept with timings
     seconds = time.perf_counter() - t0
     log.debug("layout seed %d: %d placed, %d dropped, %.3f s", seed, len(run.instances), len(run.dropped), seconds)
     return SceneLayout(room=room, instances=tuple(run.instances), dropped=tuple(run.dropped), seed=int(seed),
