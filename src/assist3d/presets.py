@@ -15,7 +15,7 @@ from .errors import ConfigError
 # Canonical names (see assist3d.scene.classes): selection matches an asset when its class or its
 # canonical class is listed, so "bookcase" and "bedside table" assets count as bookshelf and
 # nightstand. Every name matches classes of the built-in procedural library (tests check it).
-HOUSEHOLD_CLASSES = [
+HOUSEHOLD_CLASSES = (
     # floor
     "bed", "nightstand", "wardrobe", "dresser", "sofa", "armchair", "coffee table", "end table", "tv stand",
     "dining table", "chair", "desk", "office chair", "bookshelf", "shelf", "cabinet", "table", "lamp", "plant",
@@ -24,7 +24,7 @@ HOUSEHOLD_CLASSES = [
     "tv", "kitchen cabinet", "picture", "mirror", "clock", "curtain", "towel",
     # on top
     "book", "vase", "cup", "bowl", "plate", "bottle", "pillow", "monitor", "keyboard", "laptop",
-]
+)
 
 PRESETS: dict[str, dict] = {
     # ASSIST-3D as in the paper: random heterogeneous selection, relations + depth-first search,

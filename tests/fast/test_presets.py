@@ -24,7 +24,7 @@ def test_baselines_and_ablations_set_what_they_claim():
     assert rr.selection.wall_count == 0 and rr.selection.on_top_count == 0
     hd = apply_preset({}, "holodeck-style")
     assert hd.selection.pairing_prob == 1.0 and hd.layout.planner == default.layout.planner
-    assert hd.selection.allowed_classes == HOUSEHOLD_CLASSES
+    assert hd.selection.allowed_classes == list(HOUSEHOLD_CLASSES)
     assert hd.selection.floor_count < default.selection.floor_count / 4
     assert apply_preset({}, "no-context").selection.pairing_prob == pytest.approx(0.66)
     assert apply_preset({}, "assist3d").model_dump(exclude={"preset"}) == default.model_dump(exclude={"preset"})
@@ -39,11 +39,14 @@ def test_user_values_override_preset_values():
     cfg = apply_preset({"selection": {"pairing_prob": 0.2, "floor_count": 7}, "seed": 5}, "holodeck-style")
     assert cfg.selection.pairing_prob == 0.2 and cfg.selection.floor_count == 7 and cfg.seed == 5
     # keys the user did not set keep the preset's value (a nested merge, not a replacement)
-    assert cfg.selection.allowed_classes == HOUSEHOLD_CLASSES and cfg.selection.wall_count == 4
+    assert cfg.selection.allowed_classes == list(HOUSEHOLD_CLASSES) and cfg.selection.wall_count == 4
     cfg = apply_preset({"layout": {"planner": "rules"}}, "randomrooms")
     assert cfg.layout.planner == "rules" and cfg.selection.floor_count == 40
-    # applying a preset never mutates the preset table
+    # applying a preset never mutates the preset table, and a config's list is its own
     assert PRESETS["holodeck-style"]["selection"]["pairing_prob"] == 1.0
+    hd = apply_preset({}, "holodeck-style")
+    hd.selection.allowed_classes.append("spaceship")
+    assert "spaceship" not in HOUSEHOLD_CLASSES and "spaceship" not in apply_preset({}, "holodeck-style").selection.allowed_classes
 
 
 def test_unknown_preset_and_bad_user_values_are_named():
