@@ -64,6 +64,10 @@ class SelectionConfig(_Section):
                                                          "(geometry ablation; None = all).")
     allowed_classes: list[str] | None = Field(None, description="Only select assets of these classes (baselines such "
                                                                  "as holodeck-style; None = all).")
+    assets_per_class: int | None = Field(None, ge=1, description="Keep only this many models of each class (a "
+                                                                   "seeded, fixed choice), as a retrieval-based "
+                                                                   "generator such as Holodeck does; None = all "
+                                                                   "(ASSIST-3D).")
     max_classes: int | None = Field(None, ge=1, description="Restrict selection to this many classes "
                                                             "(scalability ablation: 100/200/400; None = all).")
     class_pool_seed: int = Field(0, description="Seed fixing which classes survive max_classes and class pairing.")

@@ -177,3 +177,23 @@ def test_pool_cache_follows_catalog_changes(tmp_path):
     cat.add(_rec("hovercraft", "floor", 0, 0), mesh)
     after = {r.class_name for r in _sel(cat, floor_count=200, wall_count=0, on_top_count=0).floor}
     assert "hovercraft" in after  # the cached pools were rebuilt for the changed catalog
+
+
+def test_assets_per_class_keeps_a_fixed_few_models_per_class(tmp_path):
+    from assist3d.assets.procedural import build_library
+
+    cat = build_library(tmp_path / "lib", count=400, seed=0)
+    cfg = SelectionConfig(floor_count=60, wall_count=20, on_top_count=2, assets_per_class=1,
+                          complementary_fraction=0.0)
+    seen: dict[str, set[str]] = {}
+    for k in range(4):
+        sel = select_objects(cat, cfg, np.random.default_rng(k), scene_index=k)
+        for r in list(sel.floor) + list(sel.wall) + [o for g in sel.floor_on_top + sel.wall_on_top for o in g]:
+            seen.setdefault(r.class_name, set()).add(r.id)
+    assert seen and all(len(ids) == 1 for ids in seen.values())
+    free = SelectionConfig(floor_count=60, wall_count=20, on_top_count=2, complementary_fraction=0.0)
+    sel = select_objects(cat, free, np.random.default_rng(0), scene_index=0)
+    per_class: dict[str, set[str]] = {}
+    for r in sel.floor:
+        per_class.setdefault(r.class_name, set()).add(r.id)
+    assert any(len(ids) > 1 for ids in per_class.values())

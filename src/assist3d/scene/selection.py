@@ -19,7 +19,8 @@ box fits one of its surfaces (footprint either way round, height under the clear
 cannot hold a television, and drawing one only to drop it wastes the search budget.
 
 Ablation controls: ``pairing_prob`` q co-selects each drawn class's partner class, ``clusters``
-keeps only some shape clusters, ``allowed_classes`` and ``max_classes`` restrict the class pool.
+keeps only some shape clusters, ``allowed_classes`` and ``max_classes`` restrict the class pool,
+``assets_per_class`` keeps a fixed few models per class (retrieval-style baselines).
 """
 
 from __future__ import annotations
@@ -141,7 +142,7 @@ _CACHE = _PoolCache()
 
 def _filter_key(cfg: SelectionConfig) -> tuple:
     return (cfg.min_real_classes, tuple(cfg.allowed_classes) if cfg.allowed_classes is not None else None, cfg.max_classes,
-            tuple(cfg.clusters) if cfg.clusters is not None else None, cfg.class_pool_seed)
+            tuple(cfg.clusters) if cfg.clusters is not None else None, cfg.class_pool_seed, cfg.assets_per_class)
 
 
 def is_complementary(scene_index: int, fraction: float) -> bool:
@@ -169,6 +170,18 @@ def _filter(records: tuple[AssetRecord, ...], cfg: SelectionConfig, catalog: Cat
                               f"unset selection.clusters")
         wanted = set(cfg.clusters)
         out = tuple(r for r in out if r.cluster in wanted)
+    if cfg.assets_per_class is not None:
+        # keep a seeded, fixed choice of n models per class (the same in every scene and group), as
+        # a retrieval-based generator that always returns the best match for "a chair" does
+        by_class: dict[str, list[AssetRecord]] = {}
+        for r in sorted(catalog.records, key=lambda r: r.id):
+            by_class.setdefault(r.class_name, []).append(r)
+        keep_ids: set[str] = set()
+        for cls in sorted(by_class):
+            recs = by_class[cls]
+            order = make_rng(cfg.class_pool_seed, "assets_per_class", cls).permutation(len(recs))
+            keep_ids |= {recs[int(i)].id for i in order[: cfg.assets_per_class]}
+        out = tuple(r for r in out if r.id in keep_ids)
     return out
 
 
