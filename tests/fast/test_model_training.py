@@ -248,3 +248,17 @@ def test_mixed_precision_forward_backward():
     assert torch.isfinite(loss)
     grads = [p.grad for p in model.parameters() if p.grad is not None]
     assert grads and all(g.dtype == torch.float32 and torch.isfinite(g).all() for g in grads)
+
+
+def test_presets_load_and_paper_defaults():
+    from pathlib import Path
+
+    from assist3d.engine.config import TrainConfig, load_train_config
+
+    configs = Path(__file__).resolve().parents[2] / "configs"
+    paper = load_train_config(configs / "paper.yaml")
+    assert paper.model == TrainConfig().model and paper.loss == TrainConfig().loss
+    assert paper.data.voxel_size == 0.02 and paper.data.synthetic_alpha == 0.5
+    assert [d.resolved_kind() for d in paper.data.train] == ["real", "synthetic"]
+    small = load_train_config(configs / "small-cpu.yaml")
+    assert small.model.hidden < paper.model.hidden and small.threads == 1

@@ -60,6 +60,7 @@ class DataConfig(_Section):
     voxel_size: float = Field(0.02, description="voxel edge in metres (paper 0.02)")
     synthetic_alpha: float = Field(0.5, description="weight of the synthetic loss (paper 0.5)")
     max_points: int = Field(0, description="random crop to this many points per scene (0 = no crop)")
+    cache_scenes: bool = Field(False, description="keep every loaded scene in memory (small datasets)")
 
 
 class AugmentConfig(_Section):

@@ -236,7 +236,7 @@ def train(cfg: TrainConfig, out_dir: str | Path, *, resume: bool = False, source
     info = init_distributed(device)
     if device == "cuda" and info.world_size > 1:
         device = f"cuda:{info.local_rank}"
-    src: Source = source if source is not None else _SpecSource(cfg.data.train)
+    src: Source = source if source is not None else _SpecSource(cfg.data.train, cache=cfg.data.cache_scenes)
     sampler = DistributedSampler(range(len(src)), num_replicas=info.world_size, rank=info.rank, shuffle=True,
                                  seed=cfg.seed)
     bs = cfg.optim.batch_size
