@@ -288,3 +288,18 @@ def test_bad_arguments_raise_clear_errors(tmp_path):
         build_family("chiar", rng=np.random.default_rng(0))
     with pytest.raises(AssetError, match=">= 1"):
         build_library(tmp_path / "x", count=0, seed=0)
+
+
+def test_open_catalog_rebuilds_a_library_from_an_older_generator_version():
+    from dataclasses import replace
+
+    from assist3d.assets import open_catalog, procedural_library_dir
+    from assist3d.assets.catalog import Catalog
+
+    open_catalog(None, procedural_count=12, procedural_seed=3)
+    cat = Catalog.open(procedural_library_dir(12, 3))
+    for r in cat.records:  # pretend an older assist3d built it
+        cat.update_record(replace(r, extra={**r.extra, "version": -1}))
+    cat.save()
+    again = open_catalog(None, procedural_count=12, procedural_seed=3)
+    assert len(again) == 12 and all(r.extra["version"] != -1 for r in again.records)

@@ -38,15 +38,25 @@ def open_catalog(library: str | Path | None = None, *, procedural_count: int = 2
         log.info("assets: default catalog %s (%d assets; set --assets or $%s to change)", default, len(cat), ENV_ASSETS)
         return cat
     root = procedural_library_dir(procedural_count, procedural_seed)
-    if not Catalog.exists(root):
+    cat = Catalog.open(root) if Catalog.exists(root) else None
+    if cat is None or _stale_procedural(cat, procedural_count):
         from .procedural import build_library
 
-        log.info("assets: building the built-in procedural library (%d assets, seed %d) in %s",
+        log.info("assets: %s the built-in procedural library (%d assets, seed %d) in %s",
+                 "building" if cat is None else "rebuilding (made by an older version)",
                  procedural_count, procedural_seed, root)
         build_library(root, count=procedural_count, seed=procedural_seed)
-    cat = Catalog.open(root)
+        cat = Catalog.open(root)
     log.info("assets: built-in procedural library %s (%d assets)", root, len(cat))
     return cat
+
+
+def _stale_procedural(cat: Catalog, count: int) -> bool:
+    """A cached procedural library made by another generator version (or cut short)."""
+    from .procedural import GENERATOR_VERSION
+
+    recs = cat.records
+    return len(recs) != count or any(r.extra.get("version") != GENERATOR_VERSION for r in recs[:: max(1, len(recs) // 50)])
 
 
 def class_list(catalog: Catalog) -> tuple[str, ...]:
