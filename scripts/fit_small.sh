@@ -6,10 +6,13 @@
 #   scripts/fit_small.sh [WORK_DIR]
 #
 # Environment:
-#   FIT_SOURCE=toy|generate   toy (default): 4 box-room scenes from assist3d.engine.toy in the
-#                             Pointcept layout; generate: `assist3d generate --num-scenes 4`.
-#   FIT_CONFIG=FILE           training config (default: configs/small-cpu.yaml for toy,
-#                             configs/small-cpu-generated.yaml for generate).
+#   FIT_SOURCE=generate|toy   generate (default): `assist3d generate --num-scenes 4 --config
+#                             configs/generate-sparse.yaml` (sparsely furnished generated rooms);
+#                             toy: 4 box-room scenes from assist3d.engine.toy (Pointcept layout).
+#   GEN_CONFIG=FILE           generation config for FIT_SOURCE=generate (default
+#                             configs/generate-sparse.yaml; the paper's density gives 150-250
+#                             instances per room, too many for a 2-core memorisation run).
+#   FIT_CONFIG=FILE           training config (default: configs/small-cpu.yaml).
 #   FIT_EPOCHS=N              override the preset's epochs.
 #   REAL_SCAN=PATH            the real scan (default ../shared/data/real/scannet_scene0451_01.npy).
 set -euo pipefail
@@ -18,7 +21,7 @@ ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 WORK="${1:-${TMPDIR:-/tmp}/assist3d_fit_small}"
 PY="${PYTHON:-$ROOT/.venv/bin/python}"
 A3D="$PY -m assist3d"
-SOURCE="${FIT_SOURCE:-toy}"
+SOURCE="${FIT_SOURCE:-generate}"
 REAL_SCAN="${REAL_SCAN:-$ROOT/../shared/data/real/scannet_scene0451_01.npy}"
 EPOCH_ARGS=()
 if [[ -n "${FIT_EPOCHS:-}" ]]; then EPOCH_ARGS=(--epochs "$FIT_EPOCHS"); fi
@@ -35,10 +38,10 @@ write_toy_dataset('$WORK/scenes', 4, seed=1, num_objects=6, room_m=4.0, density_
     CONFIG="${FIT_CONFIG:-$ROOT/configs/small-cpu.yaml}"
     ;;
   generate)
-    $A3D generate --out "$WORK/scenes" --num-scenes 4
+    $A3D generate --out "$WORK/scenes" --num-scenes 4 --config "${GEN_CONFIG:-$ROOT/configs/generate-sparse.yaml}"
     SPEC="synthetic=assist3d:$WORK/scenes"
     GT="assist3d:$WORK/scenes"
-    CONFIG="${FIT_CONFIG:-$ROOT/configs/small-cpu-generated.yaml}"
+    CONFIG="${FIT_CONFIG:-$ROOT/configs/small-cpu.yaml}"
     ;;
   *) echo "FIT_SOURCE must be toy or generate, got $SOURCE" >&2; exit 2 ;;
 esac
