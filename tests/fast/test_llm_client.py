@@ -14,7 +14,7 @@ from assist3d.llm.cache import ResponseCache, cache_key
 from assist3d.llm.client import ChatClient, Usage, parse_endpoint
 from assist3d.llm.prompts import load_template, render_plan_messages
 from assist3d.llm.schema import check_answer, parse_json_text
-from test_llm_fakeserver import FakeServer, Step
+from llm_fakeserver import FakeServer, Step
 from test_llm_planner import FLOOR, ONTOP, WALL
 
 

@@ -11,7 +11,7 @@ import pytest
 from assist3d.config import parse_config
 from assist3d.export.manifest import llm_summary
 from assist3d.pipeline import generate_dataset
-from test_llm_fakeserver import SENTINEL, FakeServer, Step, files_containing
+from llm_fakeserver import SENTINEL, FakeServer, Step, files_containing
 from test_llm_layout import _answer
 
 MODEL = "fake-gen"

@@ -14,7 +14,7 @@ from assist3d.config import LLMConfig
 from assist3d.contracts import AssetRecord, Opening, PlacedInstance, Relation, Room
 from assist3d.llm.planner import LLMPlanner
 from assist3d.scene.relations import GroupPlan, PlannedObject, PlanRequest, group_kind, validate_plan
-from test_llm_fakeserver import SENTINEL, FakeServer, Step, files_containing
+from llm_fakeserver import SENTINEL, FakeServer, Step, files_containing
 
 MODEL = "fake-model"
 TIMEOUT = 1.0

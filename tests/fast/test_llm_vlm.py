@@ -18,7 +18,7 @@ from assist3d.contracts import SceneMesh
 from assist3d.errors import DataError
 from assist3d.llm.views import encode_png, render_point_views, render_views
 from assist3d.llm.vlm import score_layout, vlm_layout_score
-from test_llm_fakeserver import SENTINEL, FakeServer, Step, files_containing
+from llm_fakeserver import SENTINEL, FakeServer, Step, files_containing
 
 
 def decode_png(data: bytes) -> np.ndarray:

@@ -2,7 +2,7 @@
 
 Follows ``java.util.Properties.load``: ISO-8859-1 text, ``#``/``!`` comments, keys ended by the
 first unescaped ``=``, ``:`` or white space, line continuations with a trailing backslash,
-``\\uXXXX`` and ``\\t \\n \\r \\f`` escapes. A malformed line (a bad ``\\u`` escape) is reported
+``\\u`` + four hex digits and ``\\t \\n \\r \\f`` escapes. A malformed line (a bad ``\\u`` escape) is reported
 and skipped instead of failing the whole file.
 """
 

@@ -87,7 +87,7 @@ def write_pointcept_scene(folder: Path, sample: PointSample) -> None:
 
 def write_toy_dataset(out: str | Path, num_scenes: int, *, seed: int, num_objects: int = 6, room_m: float = 5.0,
                       density_per_m2: float = 2500.0) -> list[Path]:
-    """``num_scenes`` toy scenes under ``out/scene_XXXX`` in the Pointcept layout; seeds per (seed, index)."""
+    """``num_scenes`` toy scenes under ``out/scene_NNNN`` in the Pointcept layout; seeds per (seed, index)."""
     out = Path(out)
     folders = []
     for i in range(num_scenes):

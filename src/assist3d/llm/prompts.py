@@ -3,7 +3,7 @@
 Templates live in ``assist3d/resources/prompts/`` (``floor.txt``, ``wall.txt``, ``on_top.txt``,
 ``vlm_score.txt``, ``repair.txt``); ``llm.prompt_dir`` may name a folder whose files override the
 built-in ones file by file. A template holds a ``### system`` and a ``### user`` section (lines
-before the first section marker are comments for the editor) and ``$name`` placeholders filled
+before the first section marker are comments for the editor) and ``$name`` template fields filled
 with :class:`string.Template` (write ``$$`` for a literal dollar sign):
 
 ``$group`` the group name, ``$relations`` the relation vocabulary allowed in the group,
@@ -43,10 +43,10 @@ class Template:
             return (string.Template(self.system).substitute(values).strip(),
                     string.Template(self.user).substitute(values).strip())
         except KeyError as e:
-            raise ConfigError(f"{self.source}: unknown placeholder ${e.args[0]}; known: "
+            raise ConfigError(f"{self.source}: unknown template field ${e.args[0]}; known: "
                               f"{', '.join('$' + k for k in sorted(values))} (write $$ for a dollar sign)") from None
         except ValueError as e:
-            raise ConfigError(f"{self.source}: bad placeholder ({e}); write $$ for a dollar sign") from None
+            raise ConfigError(f"{self.source}: bad template field ({e}); write $$ for a dollar sign") from None
 
 
 def parse_template(text: str, source: str) -> Template:
@@ -138,7 +138,7 @@ def _describe_instance(p: PlacedInstance) -> str:
 
 
 def request_values(request: PlanRequest) -> dict[str, str]:
-    """The placeholder values of a planning request."""
+    """The template field values of a planning request."""
     kind = group_kind(request.group)
     placed = "\n".join(_describe_instance(p) for p in request.placed) or "(none)"
     support = _describe_instance(request.support) if request.support is not None else "(none)"

@@ -22,7 +22,7 @@ def _spconv():
         import spconv.pytorch as spc
     except ImportError as e:
         raise ConfigError(f"backend 'spconv' asked for but spconv is not installed ({e}); "
-                          "pip install 'assist3d[spconv]' (CPU) or spconv-cuXXX (CUDA), or use backend torch") from None
+                          "pip install 'assist3d[spconv]' (CPU) or spconv-cu<CUDA version> (CUDA), or use backend torch") from None
     return spc
 
 
