@@ -268,3 +268,25 @@ def test_height_above_and_wall_relations_scores():
     above = relation_score("above", c, sofa)
     assert above[0] > 0.95 and above[1] == 0.0 and above[2] < above[0]  # over it / below its top / beside it
     assert relation_score("edge", c, None).tolist()[:3] == [1.0, 1.0, 1.0] and relation_score("edge", c, None)[3] == 0.0
+
+
+def test_surface_map_sees_vertical_faces_standing_on_the_surface():
+    # A 1 x 1 m board at 0.5 m with a single-sided vertical panel across its middle (x = 0): rays
+    # parallel to the panel never cross it, but nothing may stand across it.
+    import shapely
+
+    from assist3d.contracts import MeshData, SupportSurface
+    from assist3d.scene.placement.surface import surface_map
+
+    v = np.array([[-0.5, -0.5, 0.5], [0.5, -0.5, 0.5], [0.5, 0.5, 0.5], [-0.5, 0.5, 0.5],
+                  [0.0, -0.5, 0.5], [0.0, 0.5, 0.5], [0.0, 0.5, 0.8], [0.0, -0.5, 0.8]], np.float32)
+    f = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]], np.int32)
+    mesh = MeshData(v, f, np.full((4, 3), 150, np.uint8))
+    poly = ((-0.45, -0.45), (0.45, -0.45), (0.45, 0.45), (-0.45, 0.45))
+    m = surface_map(("vertical-panel-test",), mesh, SupportSurface(0.5, poly), shapely.Polygon(poly))
+    xs = m.x0 + np.arange(m.free.shape[1]) * m.step
+    col_panel = int(np.argmin(np.abs(xs)))
+    col_far = int(np.argmin(np.abs(xs - 0.35)))
+    assert np.all(m.free[:, col_panel] == 0.0)  # the panel blocks its cells
+    assert np.all(np.isinf(m.free[2:-2, col_far]))  # away from it nothing is above
+    assert m.supported[2:-2, col_far].all()

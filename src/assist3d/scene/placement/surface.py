@@ -174,6 +174,44 @@ class MeshTriangles:
         return self._tri
 
 
+def _cap_vertical_faces(free: np.ndarray, tri: np.ndarray, h: float, gx: np.ndarray, gy: np.ndarray) -> None:
+    """Lower ``free`` (flat (ny*nx,), in place) along the plan-view segments of the near-vertical
+    triangles of ``tri`` (t, 3, 3) that rise above the surface height ``h``: an object there would
+    cut through them. The free height is the triangle's lowest point above ``h`` (0 if it starts at
+    or below the surface)."""
+    if len(tri) == 0:
+        return
+    nrm = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    length = np.linalg.norm(nrm, axis=1)
+    vertical = (length > 1e-12) & (np.abs(nrm[:, 2]) < 0.05 * np.maximum(length, 1e-12)) & \
+        (tri[:, :, 2].max(1) > h + SUPPORT_TOL)
+    t = tri[vertical]
+    if len(t) == 0:
+        return
+    # the plan-view projection of a vertical triangle is the segment between its two farthest vertices
+    xy = t[:, :, :2]
+    d01 = np.linalg.norm(xy[:, 0] - xy[:, 1], axis=1)
+    d02 = np.linalg.norm(xy[:, 0] - xy[:, 2], axis=1)
+    d12 = np.linalg.norm(xy[:, 1] - xy[:, 2], axis=1)
+    pick = np.argmax(np.stack([d01, d02, d12], 1), axis=1)
+    ia = np.array([0, 0, 1])[pick]
+    ib = np.array([1, 2, 2])[pick]
+    rows = np.arange(len(t))
+    p0, p1 = xy[rows, ia], xy[rows, ib]
+    seg = np.linalg.norm(p1 - p0, axis=1)
+    steps = np.ceil(seg / (STEP / 2)).astype(np.int64) + 1
+    cap = np.maximum(t[:, :, 2].min(1) - h, 0.0)
+    tid = np.repeat(np.arange(len(t)), steps)
+    start = np.repeat(np.cumsum(steps) - steps, steps)
+    frac = (np.arange(len(tid)) - start) / np.maximum(steps[tid] - 1, 1)
+    pts = p0[tid] + frac[:, None] * (p1[tid] - p0[tid])
+    nx, ny = len(gx), len(gy)
+    i = np.floor((pts[:, 0] - (gx[0] - STEP / 2)) / STEP).astype(np.int64)
+    j = np.floor((pts[:, 1] - (gy[0] - STEP / 2)) / STEP).astype(np.int64)
+    ok = (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
+    np.minimum.at(free, (j * nx + i)[ok], cap[tid][ok])
+
+
 def surface_map(key: tuple, mesh: MeshData, surf: SupportSurface, poly: shapely.Polygon,
                 triangles: MeshTriangles | None = None) -> SurfaceMap:
     """The (cached) map of ``surf`` (polygon ``poly``) on ``mesh`` (asset frame); pass one
@@ -208,6 +246,9 @@ def surface_map(key: tuple, mesh: MeshData, surf: SupportSurface, poly: shapely.
     # An odd number of crossings above means the point is inside the mesh's material (a
     # "surface" found between two parts of a closed model): nothing can stand there.
     free[distinct_counts(cell[above], z[above], n) % 2 == 1] = 0.0
+    # Vertical faces (the side walls of a cavity, a backsplash, a backrest's front) are parallel
+    # to the rays and never crossed: trace their plan-view segments and cap the free height there.
+    _cap_vertical_faces(free, tri[near], h, gx, gy)
     # Thin parts (legs, ropes, rails) can slip between samples: each cell keeps the smallest free
     # height of its 3 x 3 neighbourhood.
     free_min = ndimage.minimum_filter(free.reshape(shape), size=3, mode="nearest")
