@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Iterable, Sequence
 
 import numpy as np
+import shapely
 
 from ..contracts import AssetRecord, MeshData, SkippedAsset
 from .catalog import Catalog
@@ -36,6 +37,9 @@ from .objfile import ObjUnsupported, obj_arrays
 from .properties import parse_properties
 
 log = logging.getLogger(__name__)
+
+OUTDOOR_CATEGORIES = frozenset({"Exterior", "Vehicles"})
+SUBSTRUCTURE_DEPTH = 0.10  # m below a declared dropOnTopElevation surface
 
 SOURCE = "sh3d"
 SH3D_FURNITURE_DIR = Path("/usr/share/sweethome3d/furniture")
@@ -383,7 +387,16 @@ def _convert(entry: Sh3dEntry) -> tuple[AssetRecord, MeshData]:
         drop_height = drop * norm.size[2] if drop <= 1.0 else drop / 100.0
         drop_height = min(drop_height, norm.size[2])
         top = support_at_height(mesh, drop_height)
-        supports = (top,) + tuple(s for s in supports if abs(s.height - drop_height) > 0.03)
+        # Surfaces found just under the declared top (a pool table's cushion bed under its felt)
+        # are sub-structure, not places to put things: objects there would cut into the top.
+        top_poly = shapely.Polygon(top.polygon) if len(top.polygon) >= 3 else None
+        supports = (top,) + tuple(
+            s for s in supports
+            if abs(s.height - drop_height) > 0.03
+            and not (drop_height - SUBSTRUCTURE_DEPTH < s.height < drop_height and top_poly is not None
+                     and len(s.polygon) >= 3 and shapely.Polygon(s.polygon).intersects(top_poly)))
+    if category in OUTDOOR_CATEGORIES:
+        supports = ()  # pools and cars are not furniture to put things on in a room
     groups = assign_groups(norm.size, elevation=elevation, name=name, category=category)
     creator = p.get("creator", "").strip()
     attribution = f"{creator or 'unknown author'}, {entry.catalog_name} (Sweet Home 3D), {entry.license}"
