@@ -331,3 +331,21 @@ def test_full_debian_import_acceptance(tmp_path, sh3d_dir):
         want = np.array([float(props[r.id][k]) for k in ("width", "depth", "height")]) / 100
         assert np.all(np.abs(np.array(r.size) - want) <= 0.05 * want + 1e-9), r.id
     assert all(s.reason.startswith(("door or window", "no triangles")) for s in report.skipped)
+
+
+def test_outdoor_models_carry_nothing(tmp_path):
+    # A box table indoors has its top as a support; the same box in the Exterior or Vehicles
+    # category (pools, cars) has none.
+    props = "license=Creative Commons Attribution 3.0 license\nname=Outdoor\n"
+    props += model_props(1, "Box table", "m/box.obj", w=100, d=60, h=75)
+    props += model_props(2, "Pool", "m/box.obj", w=100, d=60, h=75).replace("category#2=Living room", "category#2=Exterior")
+    props += model_props(3, "Car", "m/box.obj", w=100, d=60, h=75).replace("category#3=Living room", "category#3=Vehicles")
+    path = tmp_path / "Outdoor.sh3f"
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("PluginFurnitureCatalog.properties", props.encode("iso-8859-1"))
+        z.writestr("m/box.obj", box_obj(1, 1, 1))
+    cat = Catalog.open_or_create(tmp_path / "lib")
+    import_sh3d(cat, [path], workers=1)
+    by_name = {r.name: r for r in cat.records}
+    assert by_name["Box table"].supports and abs(by_name["Box table"].supports[0].height - 0.75) < 0.01
+    assert by_name["Pool"].supports == () and by_name["Car"].supports == ()
