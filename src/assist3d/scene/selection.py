@@ -159,15 +159,18 @@ def _filter(records: tuple[AssetRecord, ...], cfg: SelectionConfig, catalog: Cat
         out = tuple(r for r in out if normalise_class(r.class_name) in allowed or canonical_class(r.class_name) in allowed)
     if cfg.max_classes is not None:
         classes = sorted({r.class_name for r in catalog.records})
-        if cfg.max_classes < len(classes):
+        if cfg.max_classes >= len(classes):
+            log.warning("selection.max_classes = %d but catalog %s has only %d classes: no restriction",
+                        cfg.max_classes, catalog.root, len(classes))
+        else:
             keep_idx = make_rng(cfg.class_pool_seed, "max_classes").choice(len(classes), cfg.max_classes, replace=False)
             keep = {classes[int(i)] for i in keep_idx}
             out = tuple(r for r in out if r.class_name in keep)
     if cfg.clusters is not None:
         if not any(r.cluster is not None for r in catalog.records):
             raise ConfigError(f"{catalog.root}: selection.clusters is set but no asset of this catalog has a "
-                              f"shape-cluster id; assign cluster ids first (the metrics stage writes them) or "
-                              f"unset selection.clusters")
+                              f"shape-cluster id; assign them first with `assist3d cluster-assets --library "
+                              f"{catalog.root} --k 5`, or unset selection.clusters")
         wanted = set(cfg.clusters)
         out = tuple(r for r in out if r.cluster in wanted)
     if cfg.assets_per_class is not None:
