@@ -2,7 +2,9 @@
 
 Each request takes the next step of the script (the last step repeats): a status, an assistant
 text, an optional delay before answering (a stall), a raw body, or an endless body without a
-Content-Length. Every request's headers and JSON body are recorded.
+Content-Length. Every request's headers and JSON body are recorded, and every request is checked
+against the chat-completions protocol: leaving the ``with`` block fails the test if the client
+sent a malformed request or put the API key anywhere but the Authorization header.
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ class FakeServer:
         self.requests: list[dict] = []
         self.active = 0
         self.max_active = 0
+        self.protocol_errors: list[str] = []
         self._lock = threading.Lock()
         self._stop = threading.Event()
         owner = self
@@ -58,7 +61,9 @@ class FakeServer:
 
             def do_POST(self) -> None:
                 body = self.rfile.read(int(self.headers.get("Content-Length", 0)))
+                problems = protocol_problems(self.path, dict(self.headers), body)
                 with owner._lock:
+                    owner.protocol_errors.extend(problems)
                     owner.requests.append({"path": self.path, "headers": dict(self.headers),
                                            "json": json.loads(body)})
                     step = (owner.responder(owner.requests[-1]["json"]) if owner.responder else
@@ -123,10 +128,40 @@ class FakeServer:
         self.thread.start()
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, exc_type, *exc) -> None:
         self._stop.set()
         self.httpd.shutdown()
         self.httpd.server_close()
+        if exc_type is None:
+            assert not self.protocol_errors, f"malformed chat-completions requests: {self.protocol_errors}"
+
+
+def protocol_problems(path: str, headers: dict, body: bytes) -> list[str]:
+    """What is wrong with one request for an OpenAI-compatible /chat/completions endpoint."""
+    out = []
+    if not path.endswith("/chat/completions"):
+        out.append(f"POST to {path!r}, not .../chat/completions")
+    if SENTINEL.encode() in body:
+        out.append("the API key is in the request body")
+    try:
+        data = json.loads(body)
+    except ValueError:
+        return out + ["body is not JSON"]
+    if not isinstance(data.get("model"), str) or not data["model"]:
+        out.append("no model name")
+    msgs = data.get("messages")
+    if not isinstance(msgs, list) or not msgs:
+        out.append("no messages")
+    else:
+        for m in msgs:
+            if not isinstance(m, dict) or m.get("role") not in ("system", "user", "assistant"):
+                out.append(f"bad message role in {str(m)[:80]}")
+            elif not isinstance(m.get("content"), (str, list)):
+                out.append(f"bad message content type {type(m.get('content')).__name__}")
+    auth = {k.lower(): v for k, v in headers.items()}.get("authorization")
+    if auth is not None and not auth.startswith("Bearer "):
+        out.append("Authorization header is not a Bearer token")
+    return out
 
 
 def files_containing(secret: str, *folders: Path) -> list[Path]:
