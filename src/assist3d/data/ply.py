@@ -302,3 +302,14 @@ def write_ply(path: str | Path, coord: np.ndarray, color: np.ndarray | None = No
         body += f.tobytes()
     header.append("end_header")
     write_bytes_atomic(path, ("\n".join(header) + "\n").encode("ascii") + body)
+
+
+def read_scan_mesh(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A scan mesh's per-vertex (coord (n, 3) float32, color (n, 3) uint8 (zeros when the file has
+    none), normal (n, 3) float32 area-weighted vertex normals), in vertex order."""
+    mesh = read_ply(path, faces=True)
+    coord = mesh.xyz()
+    color = mesh.rgb()
+    if color is None:
+        color = np.zeros((len(coord), 3), np.uint8)
+    return coord, color, mesh_normals(mesh)

@@ -24,7 +24,7 @@ import numpy as np
 from ..contracts import PointSample
 from ..errors import DataError
 from .base import SceneDataset, instances_from_groups, read_json, require_key
-from .ply import mesh_normals, read_ply
+from .ply import read_scan_mesh
 
 log = logging.getLogger(__name__)
 
@@ -104,13 +104,8 @@ class ScanNetDataset(SceneDataset):
 
     def _load(self, scene_id: str) -> PointSample:
         d = self._scene_dir[scene_id]
-        mesh = read_ply(d / f"{scene_id}_vh_clean_2.ply", faces=True)
-        coord = mesh.xyz()
+        coord, color, normal = read_scan_mesh(d / f"{scene_id}_vh_clean_2.ply")
         n = len(coord)
-        color = mesh.rgb()
-        if color is None:
-            color = np.zeros((n, 3), np.uint8)
-        normal = mesh_normals(mesh)
 
         segs_path = d / f"{scene_id}_vh_clean_2.0.010000.segs.json"
         seg = np.asarray(require_key(segs_path, read_json(segs_path), "segIndices", list), dtype=np.int64)

@@ -22,7 +22,7 @@ import numpy as np
 from ..contracts import PointSample
 from ..errors import DataError
 from .base import SceneDataset, instances_from_groups, read_json, require_key
-from .ply import mesh_normals, read_ply
+from .ply import read_scan_mesh
 
 log = logging.getLogger(__name__)
 
@@ -57,13 +57,8 @@ class ScanNetPPDataset(SceneDataset):
 
     def _load(self, scene_id: str) -> PointSample:
         scans = self._scene_dir[scene_id] / "scans"
-        mesh = read_ply(scans / MESH, faces=True)
-        coord = mesh.xyz()
+        coord, color, normal = read_scan_mesh(scans / MESH)
         n = len(coord)
-        color = mesh.rgb()
-        if color is None:
-            color = np.zeros((n, 3), np.uint8)
-        normal = mesh_normals(mesh)
 
         seg_path = scans / "segments.json"
         seg = np.asarray(require_key(seg_path, read_json(seg_path), "segIndices", list), dtype=np.int64)

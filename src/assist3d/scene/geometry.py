@@ -316,3 +316,22 @@ def boxes_collide(cx: np.ndarray, cy: np.ndarray, cyaw: np.ndarray, chw: float |
     if n == 0 or len(boxes["x"]) == 0:
         return np.zeros(n, dtype=bool)
     return (footprints_overlap(cx, cy, cyaw, chw, chd, boxes, margin) & z_overlap(cz0, cz1, boxes)).any(1)
+
+
+def along_walls(walls, width: float, depth: float, step: float, gap: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Centres and yaws (x, y, yaw: (n,) float64) of a ``width`` x ``depth`` footprint with its back
+    ``gap`` from each wall segment long enough for it, every ``step`` along the wall plus one flush
+    with the wall's far end. ``walls`` is :func:`wall_segments`' result."""
+    xs, ys, yaws = [], [], []
+    for i in range(len(walls.length)):
+        length = float(walls.length[i])
+        if length < width:
+            continue
+        s = np.unique(np.append(np.arange(width / 2, length - width / 2 + 1e-6, step), length - width / 2))
+        xs.append(walls.start[i, 0] + walls.direction[i, 0] * s + walls.normal[i, 0] * (depth / 2 + gap))
+        ys.append(walls.start[i, 1] + walls.direction[i, 1] * s + walls.normal[i, 1] * (depth / 2 + gap))
+        yaws.append(np.full_like(s, walls.yaw[i]))
+    if not xs:
+        e = np.zeros(0)
+        return e, e, e
+    return np.concatenate(xs), np.concatenate(ys), np.concatenate(yaws)

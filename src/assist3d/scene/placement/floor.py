@@ -22,7 +22,7 @@ from scipy import ndimage
 
 from ...config import LayoutConfig
 from ...contracts import Room
-from ..geometry import room_polygon, rotated_half_extents, wall_segments
+from ..geometry import along_walls, room_polygon, rotated_half_extents, wall_segments
 from .common import PRIOR_WEIGHT, Item, RelationState, order_candidates
 from .scoring import Candidates, TargetBox
 from .search import Choice
@@ -202,20 +202,11 @@ class FloorProblem:
 
     def _snapped_part(self, w: float, d: float, h: float) -> tuple[Candidates, tuple[np.ndarray, ...]]:
         """Candidates with the back against a wall (2 mm gap), valid in the empty room."""
-        wl, g = self.walls, self.grid
-        xs, ys, yaws = [], [], []
-        for i in range(len(wl.length)):
-            length = float(wl.length[i])
-            if length < w:
-                continue
-            s = np.unique(np.append(np.arange(w / 2, length - w / 2 + EPS, self.cfg.cell_size), length - w / 2))
-            xs.append(wl.start[i, 0] + wl.direction[i, 0] * s + wl.normal[i, 0] * (d / 2 + SNAP_GAP))
-            ys.append(wl.start[i, 1] + wl.direction[i, 1] * s + wl.normal[i, 1] * (d / 2 + SNAP_GAP))
-            yaws.append(np.full_like(s, wl.yaw[i]))
-        if not xs:
+        g = self.grid
+        x, y, yaw = along_walls(self.walls, w, d, self.cfg.cell_size, SNAP_GAP)
+        if len(x) == 0:
             e = np.zeros(0)
             return Candidates(e, e, e, e, (w, d, h), e, e), (e.astype(int),) * 4
-        x, y, yaw = np.concatenate(xs), np.concatenate(ys), np.concatenate(yaws)
         ex, ey = rotated_half_extents(w, d, yaw)
         i0, i1, j0, j1 = g.ranges(x, y, ex, ey)
         ok = (i0 >= 0) & (j0 >= 0) & (i1 <= g.nx) & (j1 <= g.ny) & (_rect_sums(self.static_sat, i0, i1, j0, j1) == 0)

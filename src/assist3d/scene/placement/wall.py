@@ -15,7 +15,7 @@ import numpy as np
 
 from ...config import LayoutConfig
 from ...contracts import PlacedInstance, Room
-from ..geometry import (InstanceBoxes, footprints_overlap, rect_corners, rects_in_polygon, room_polygon,
+from ..geometry import (InstanceBoxes, along_walls, footprints_overlap, rect_corners, rects_in_polygon, room_polygon,
                         wall_segments, z_overlap)
 from .common import PRIOR_WEIGHT, Item, RelationState, order_candidates, target_box
 from .scoring import Candidates
@@ -88,20 +88,10 @@ class WallProblem:
     def _positions(self, k: int) -> Candidates:
         """Item ``k``'s positions along all walls (z = 0) whose footprint stays inside the room."""
         w, d, h = (float(v) for v in self.items[k].record.size)
-        wl = self.walls
-        xs, ys, yaws = [], [], []
-        for i in range(len(wl.length)):
-            length = float(wl.length[i])
-            if length < w:
-                continue
-            s = np.unique(np.append(np.arange(w / 2, length - w / 2 + EPS, self.cfg.wall_step), length - w / 2))
-            xs.append(wl.start[i, 0] + wl.direction[i, 0] * s + wl.normal[i, 0] * (d / 2 + WALL_GAP))
-            ys.append(wl.start[i, 1] + wl.direction[i, 1] * s + wl.normal[i, 1] * (d / 2 + WALL_GAP))
-            yaws.append(np.full_like(s, wl.yaw[i]))
-        if not xs:
+        x, y, yaw = along_walls(self.walls, w, d, self.cfg.wall_step, WALL_GAP)
+        if len(x) == 0:
             e = np.zeros(0)
             return Candidates(e, e, e, e, (w, d, h))
-        x, y, yaw = np.concatenate(xs), np.concatenate(ys), np.concatenate(yaws)
         inside = rects_in_polygon(rect_corners(x, y, yaw, w, d), self.poly)
         return Candidates(x[inside], y[inside], yaw[inside], np.zeros(int(inside.sum())), (w, d, h))
 
