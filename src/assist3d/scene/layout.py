@@ -30,7 +30,7 @@ from ..contracts import AssetRecord, DroppedObject, PlacedInstance, Relation, Sc
 from ..errors import AssistError
 from ..rng import make_rng
 from .planners import make_planner
-from .relations import CROSS_GROUP, RELATIONS, GroupPlan, PlannedObject, Planner, PlanRequest, group_kind
+from .relations import CROSS_GROUP, RELATIONS, GroupPlan, PlannedObject, Planner, PlanRequest, group_kind, relation_problem
 from .room import sample_room
 from .rules import RulePlanner
 from .selection import Selection, select_objects
@@ -74,7 +74,7 @@ def sanitise_plan(plan: GroupPlan, request: PlanRequest) -> tuple[GroupPlan, lis
         rels: list[Relation] = []
         broken_hard: str | None = None
         for r in item.relations:
-            problem = _relation_problem(r, kind, placed_ids, new_pos)
+            problem = relation_problem(r, kind, placed_ids, new_pos)
             if problem is None:
                 rels.append(Relation(r.kind, new_pos[r.target] if _indexes_plan(r) else r.target, r.value, r.hard))
             elif r.hard:
@@ -102,25 +102,6 @@ def sanitise_plan(plan: GroupPlan, request: PlanRequest) -> tuple[GroupPlan, lis
 def _indexes_plan(r: Relation) -> bool:
     spec = RELATIONS.get(r.kind)
     return spec is not None and spec.needs_target and r.kind not in CROSS_GROUP
-
-
-def _relation_problem(r: Relation, kind: str, placed_ids: set[int], new_pos: dict[int, int]) -> str | None:
-    spec = RELATIONS.get(r.kind)
-    if spec is None:
-        return f"unknown relation {r.kind!r}"
-    if kind not in spec.groups:
-        return f"relation {r.kind!r} is not allowed for {kind} objects"
-    if len(r.value) != spec.values:
-        return f"relation {r.kind!r} needs {spec.values} value(s), got {len(r.value)}"
-    if spec.needs_target:
-        if r.target is None:
-            return f"relation {r.kind!r} has no target"
-        if r.kind in CROSS_GROUP:
-            if r.target not in placed_ids:
-                return f"relation {r.kind!r} to unknown instance {r.target}"
-        elif r.target not in new_pos:
-            return f"relation {r.kind!r} to unknown or later object {r.target}"
-    return None
 
 
 @dataclass

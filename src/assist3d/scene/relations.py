@@ -11,7 +11,7 @@ Group names: ``"floor"``, ``"wall"``, and ``"on:<support instance id>"`` for on-
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol, Sequence
+from typing import Container, Protocol, Sequence
 
 import numpy as np
 
@@ -102,6 +102,31 @@ class Planner(Protocol):
     def plan(self, request: PlanRequest, *, rng: np.random.Generator) -> GroupPlan: ...
 
 
+def relation_problem(r: Relation, kind: str, placed_ids: Container[int], earlier: Container[int]) -> str | None:
+    """Why relation ``r`` of a ``kind`` ('floor' | 'wall' | 'on') object cannot be used, or None.
+
+    ``placed_ids``: instance ids a CROSS_GROUP target may name; ``earlier``: plan positions an
+    in-group target may name (the objects before this one)."""
+    spec = RELATIONS.get(r.kind)
+    if spec is None:
+        return f"unknown relation {r.kind!r}"
+    if kind not in spec.groups:
+        return f"relation {r.kind!r} is not allowed for {kind} objects"
+    if len(r.value) != spec.values:
+        return f"relation {r.kind!r} needs {spec.values} value(s), got {len(r.value)}"
+    if r.kind == "height" and not r.value[0] <= r.value[1]:
+        return f"relation 'height' has an empty range {tuple(r.value)}"
+    if spec.needs_target:
+        if r.target is None:
+            return f"relation {r.kind!r} has no target"
+        if r.kind in CROSS_GROUP:
+            if r.target not in placed_ids:
+                return f"relation {r.kind!r} to unknown instance {r.target} (not a placed instance)"
+        elif r.target not in earlier:
+            return f"relation {r.kind!r} to unknown or later object {r.target} (not an earlier object of the plan)"
+    return None
+
+
 def validate_plan(plan: GroupPlan, request: PlanRequest) -> list[str]:
     """Problems with a plan: unknown kinds, targets that are not earlier objects, duplicates,
     missing objects. An empty list means the plan is well-formed."""
@@ -117,22 +142,9 @@ def validate_plan(plan: GroupPlan, request: PlanRequest) -> list[str]:
             problems.append(f"position {pos}: object {item.source} listed twice")
         seen.add(item.source)
         for r in item.relations:
-            spec = RELATIONS.get(r.kind)
-            if spec is None:
-                problems.append(f"position {pos}: unknown relation {r.kind!r}")
-                continue
-            if kind not in spec.groups:
-                problems.append(f"position {pos}: relation {r.kind!r} not allowed for {kind} objects")
-            if spec.needs_target:
-                if r.target is None:
-                    problems.append(f"position {pos}: relation {r.kind!r} needs a target")
-                elif r.kind in CROSS_GROUP:
-                    if r.target not in placed_ids:
-                        problems.append(f"position {pos}: {r.kind!r} target {r.target} is not a placed instance")
-                elif not 0 <= r.target < pos:
-                    problems.append(f"position {pos}: {r.kind!r} target {r.target} is not an earlier object")
-            if len(r.value) != spec.values:
-                problems.append(f"position {pos}: relation {r.kind!r} needs {spec.values} value(s)")
+            problem = relation_problem(r, kind, placed_ids, range(pos))
+            if problem is not None:
+                problems.append(f"position {pos}: {problem}")
     missing = set(range(len(request.objects))) - seen
     if missing:
         problems.append(f"objects never planned: {sorted(missing)}")

@@ -9,7 +9,7 @@ import numpy as np
 
 from ...contracts import AssetRecord, PlacedInstance, Relation
 from ..geometry import pose_xyz_yaw
-from ..relations import CROSS_GROUP, RELATIONS, GroupPlan, PlanRequest, group_kind
+from ..relations import CROSS_GROUP, RELATIONS, GroupPlan, PlanRequest, group_kind, relation_problem
 from .scoring import SATISFIED, Candidates, TargetBox, relation_score
 from .search import Choice
 
@@ -54,7 +54,7 @@ def resolve_plan(request: PlanRequest, plan: GroupPlan) -> tuple[list[Item], lis
         rels: list[Relation] = []
         forced: str | None = None
         for r in po.relations:
-            problem = _relation_problem(r, kind, pos, pos_to_item, placed_ids)
+            problem = relation_problem(r, kind, placed_ids, pos_to_item)
             if problem is None:
                 target = r.target
                 if RELATIONS[r.kind].needs_target and r.kind not in CROSS_GROUP:
@@ -74,27 +74,6 @@ def resolve_plan(request: PlanRequest, plan: GroupPlan) -> tuple[list[Item], lis
     for note in notes:
         log.debug("%s: %s", request.group, note)
     return items, notes
-
-
-def _relation_problem(r: Relation, kind: str, pos: int, pos_to_item: dict[int, int], placed_ids: set[int]) -> str | None:
-    spec = RELATIONS.get(r.kind)
-    if spec is None:
-        return "unknown relation kind"
-    if kind not in spec.groups:
-        return f"not allowed for {kind} objects"
-    if len(r.value) != spec.values:
-        return f"needs {spec.values} value(s), got {len(r.value)}"
-    if r.kind == "height" and not (r.value[0] <= r.value[1]):
-        return f"empty height range {r.value}"
-    if spec.needs_target:
-        if r.target is None:
-            return "no target"
-        if r.kind in CROSS_GROUP:
-            if r.target not in placed_ids:
-                return f"target {r.target} is not a placed instance"
-        elif not (0 <= r.target < pos) or r.target not in pos_to_item:
-            return f"target {r.target} is not an earlier object of the plan"
-    return None
 
 
 def target_box(inst: PlacedInstance, size: tuple[float, float, float]) -> TargetBox:
