@@ -76,6 +76,19 @@ def resolve_plan(request: PlanRequest, plan: GroupPlan) -> tuple[list[Item], lis
     return items, notes
 
 
+class MovingBoxesMixin:
+    """push/pop for search problems that keep placed items in ``self.moving`` (boxes) and
+    ``self.rel`` (:class:`RelationState`)."""
+
+    def push(self, k: int, choice) -> None:
+        self.moving.add(k, choice.x, choice.y, choice.yaw, choice.z, self.items[k].record.size)  # type: ignore[attr-defined]
+        self.rel.place(k, choice)  # type: ignore[attr-defined]
+
+    def pop(self, k: int) -> None:
+        self.moving.pop()  # type: ignore[attr-defined]
+        self.rel.remove(k)  # type: ignore[attr-defined]
+
+
 def target_box(inst: PlacedInstance, size: tuple[float, float, float]) -> TargetBox:
     x, y, z, yaw = pose_xyz_yaw(inst.pose)
     return TargetBox(x, y, yaw, float(size[0]), float(size[1]), z, z + float(size[2]))

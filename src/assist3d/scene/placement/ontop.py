@@ -20,7 +20,7 @@ import shapely
 from ...config import LayoutConfig
 from ...contracts import MeshData, PlacedInstance, Room, SupportSurface
 from ..geometry import InstanceBoxes, boxes_collide, pose_xyz_yaw, world_bounds
-from .common import Item, RelationState, order_candidates, target_box
+from .common import Item, MovingBoxesMixin, RelationState, order_candidates, target_box
 from .scoring import Candidates
 from .search import Choice
 from .surface import MeshTriangles, surface_map
@@ -38,7 +38,7 @@ def _clean_polygon(points: tuple[tuple[float, float], ...]) -> shapely.Polygon:
     return shapely.orient_polygons(poly) if poly.area > 0 else poly
 
 
-class OnTopProblem:
+class OnTopProblem(MovingBoxesMixin):
     """One on-top group as a :class:`~assist3d.scene.placement.search.SearchProblem`."""
 
     def __init__(self, room: Room, items: list[Item], support: PlacedInstance,
@@ -148,10 +148,3 @@ class OnTopProblem:
     def min_future_skips(self, k: int, placed: int) -> int:
         return max(0, int(self.avoidable_after[k]) - max(self.cap - placed, 0))
 
-    def push(self, k: int, choice: Choice) -> None:
-        self.moving.add(k, choice.x, choice.y, choice.yaw, choice.z, self.items[k].record.size)
-        self.rel.place(k, choice)
-
-    def pop(self, k: int) -> None:
-        self.moving.pop()
-        self.rel.remove(k)

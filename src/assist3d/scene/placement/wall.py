@@ -17,7 +17,7 @@ from ...config import LayoutConfig
 from ...contracts import PlacedInstance, Room
 from ..geometry import (InstanceBoxes, along_walls, footprints_overlap, rect_corners, rects_in_polygon, room_polygon,
                         wall_segments, z_overlap)
-from .common import PRIOR_WEIGHT, Item, RelationState, order_candidates, target_box
+from .common import PRIOR_WEIGHT, Item, MovingBoxesMixin, RelationState, order_candidates, target_box
 from .scoring import Candidates
 from .search import Choice
 
@@ -28,7 +28,7 @@ WALL_GAP = 0.001  # gap between a wall object's back and the wall, m
 EPS = 1e-6
 
 
-class WallProblem:
+class WallProblem(MovingBoxesMixin):
     """The wall group as a :class:`~assist3d.scene.placement.search.SearchProblem`."""
 
     def __init__(self, room: Room, items: list[Item], placed: tuple[PlacedInstance, ...],
@@ -159,10 +159,3 @@ class WallProblem:
     def min_future_skips(self, k: int, placed: int) -> int:
         return 0
 
-    def push(self, k: int, choice: Choice) -> None:
-        self.moving.add(k, choice.x, choice.y, choice.yaw, choice.z, self.items[k].record.size)
-        self.rel.place(k, choice)
-
-    def pop(self, k: int) -> None:
-        self.moving.pop()
-        self.rel.remove(k)
