@@ -48,12 +48,14 @@ def main() -> None:
     ap.add_argument("--scenes", type=int, default=100)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--assets", default=None, help="catalog folder (default: as assist3d generate)")
+    ap.add_argument("--seed", type=int, default=0, help="dataset seed (as assist3d generate --seed)")
     ap.add_argument("--presets", nargs="+", default=["pairing-0", "pairing-0.33", "pairing-0.66", "pairing-1.0"])
     ap.add_argument("--sparse", action="store_true", help="12 floor, 4 wall, 2 on-top objects per support "
                                                           "instead of the presets' counts")
     args = ap.parse_args()
     logging.basicConfig(level=logging.ERROR)
-    overrides = SPARSE if args.sparse else {}
+    overrides = dict(SPARSE) if args.sparse else {}
+    overrides["seed"] = args.seed
     jobs = [(args.assets, p, overrides, i) for p in args.presets for i in range(args.scenes)]
     with ProcessPoolExecutor(args.workers) as ex:
         results = list(ex.map(_classes, jobs, chunksize=4))

@@ -11,7 +11,7 @@ import difflib
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from .errors import ConfigError
 
@@ -76,6 +76,14 @@ class SelectionConfig(_Section):
                                                                       "near-identical models does not dominate); "
                                                                       "'asset': uniform over assets (paper: "
                                                                       "uniform, unspecified).")
+    strategy: Literal["heterogeneous", "room-type"] = Field(
+        "heterogeneous", description="'heterogeneous': the paper's random draws (floor_count, wall_count, "
+                                     "on_top_count per support); 'room-type': a Holodeck-style room: a room type "
+                                     "drawn per scene and its typical object list with quantities "
+                                     "(assist3d.scene.roomtypes; floor_count and wall_count are then unused, "
+                                     "on_top_count still applies).")
+    room_types: list[str] | None = Field(None, description="Room types drawn from with strategy 'room-type' "
+                                                           "(None = all of assist3d.scene.roomtypes.ROOM_TEMPLATES).")
     on_top_fit: bool = Field(True, description="Draw a support's K on-top assets only among those whose box fits "
                                                "one of its surfaces (footprint, either way round, and clearance); "
                                                "paper: unspecified. False = the whole on-top pool.")
@@ -83,6 +91,17 @@ class SelectionConfig(_Section):
                                                        "the pool holds at least this many of them (else 70 % of, "
                                                        "say, on-top draws would be ScanNet18's lone 'picture'); "
                                                        "paper: n/a.")
+
+    @field_validator("room_types")
+    @classmethod
+    def _known_room_types(cls, v: list[str] | None) -> list[str] | None:
+        from .scene.roomtypes import ROOM_TEMPLATES
+
+        if v is not None:
+            unknown = [t for t in v if t not in ROOM_TEMPLATES]
+            if unknown or not v:
+                raise ValueError(f"unknown room type(s) {unknown or v}; known: {', '.join(ROOM_TEMPLATES)}")
+        return v
 
 
 class LayoutConfig(_Section):

@@ -68,5 +68,6 @@ def write_npy_atomic(path: str | os.PathLike, array: np.ndarray) -> None:
 def write_npz_atomic(path: str | os.PathLike, **arrays: np.ndarray) -> None:
     """Write an uncompressed ``.npz`` atomically (fixed zip timestamps keep it byte-stable)."""
     buf = io.BytesIO()
-    np.savez(buf, **{k: np.ascontiguousarray(v) for k, v in arrays.items()})
+    # np.ascontiguousarray would turn a 0-d array (a scalar) into shape (1,); keep shapes as given
+    np.savez(buf, **{k: np.asarray(v, order="C") for k, v in arrays.items()})
     write_bytes_atomic(path, buf.getvalue())

@@ -10,21 +10,13 @@ import difflib
 
 from .config import GenerateConfig, _merge, parse_config
 from .errors import ConfigError
+from .scene.roomtypes import template_classes
 
-# Household classes a Holodeck-style generator (an LLM asked for a typical room) keeps choosing.
-# Canonical names (see assist3d.scene.classes): selection matches an asset when its class or its
-# canonical class is listed, so "bookcase" and "bedside table" assets count as bookshelf and
-# nightstand. Every name matches classes of the built-in procedural library (tests check it).
-HOUSEHOLD_CLASSES = (
-    # floor
-    "bed", "nightstand", "wardrobe", "dresser", "sofa", "armchair", "coffee table", "end table", "tv stand",
-    "dining table", "chair", "desk", "office chair", "bookshelf", "shelf", "cabinet", "table", "lamp", "plant",
-    "toilet", "sink", "bathtub", "refrigerator", "counter", "stool", "ottoman", "trash can",
-    # wall
-    "tv", "kitchen cabinet", "picture", "mirror", "clock", "curtain", "towel",
-    # on top
-    "book", "vase", "cup", "bowl", "plate", "bottle", "pillow", "monitor", "keyboard", "laptop",
-)
+# Every class a Holodeck-style room may hold (the room templates of assist3d.scene.roomtypes).
+# Canonical names (see assist3d.scene.classes): an asset matches when its class or its canonical
+# class is listed, so "bookcase" and "bedside table" assets count as bookshelf and nightstand.
+# Every name matches classes of the built-in procedural library (tests check it).
+HOUSEHOLD_CLASSES = template_classes()
 
 PRESETS: dict[str, dict] = {
     # ASSIST-3D as in the paper: random heterogeneous selection, relations + depth-first search,
@@ -36,11 +28,12 @@ PRESETS: dict[str, dict] = {
         "layout": {"planner": "none"},
         "selection": {"floor_count": 40, "wall_count": 0, "on_top_count": 0, "complementary_fraction": 0.0},
     },
-    # Holodeck-style: common household classes paired with their typical neighbours, few objects,
-    # relation-guided placement.
+    # Holodeck-style: a room type per scene and the objects an LLM keeps choosing for it (anchors,
+    # typical companions, identical copies), a fixed few retrieved models per class, relation-guided
+    # placement.
     "holodeck-style": {
-        "selection": {"floor_count": 14, "wall_count": 4, "on_top_count": 2, "allowed_classes": HOUSEHOLD_CLASSES,
-                      "pairing_prob": 1.0, "complementary_fraction": 0.0},
+        "selection": {"strategy": "room-type", "on_top_count": 2, "assets_per_class": 2,
+                      "complementary_fraction": 0.0},
     },
     # ASSIST-3D without context complexity: a class's partner is co-selected with probability 0.66.
     "no-context": {"selection": {"pairing_prob": 0.66}},

@@ -143,3 +143,24 @@ def test_blocked_room_is_unreachable(catalog):
                   for i in range(7))
     rep = score_layout(SceneLayout(ROOM, insts, (), seed=0, seconds=0.0), catalog)
     assert rep.components["reachable"] < 0.5
+
+
+def test_asset_feature_cache_is_reused(catalog, monkeypatch):
+    """The second call reads <catalog>/features.npz instead of describing meshes again (it used to
+    fail on its own cache: the seed came back as shape (1,))."""
+    from assist3d.metrics import clusters
+
+    ids, feats = clusters.asset_features(catalog)
+    assert sorted(ids) == ["cabinet", "cup", "picture", "table"] and feats.shape == (4, FEATURE_DIM)
+    with np.load(catalog.root / clusters.FEATURES_FILE) as z:
+        assert z["seed"].shape == ()
+
+    def fail(*a, **k):
+        raise AssertionError("descriptor recomputed although cached")
+
+    monkeypatch.setattr(clusters, "mesh_descriptor", fail)
+    ids2, feats2 = clusters.asset_features(catalog)
+    assert ids2 == ids and np.array_equal(feats2, feats)
+    # another seed is a different cache: recomputed
+    with pytest.raises(AssertionError, match="recomputed"):
+        clusters.asset_features(catalog, seed=1)

@@ -1,5 +1,5 @@
 """Generator presets: every preset validates, user values win over preset values, the baselines
-change what they claim to change, and the Holodeck-style class list matches real asset classes."""
+change what they claim to change, and the Holodeck-style room templates name real asset classes."""
 
 from __future__ import annotations
 
@@ -23,9 +23,9 @@ def test_baselines_and_ablations_set_what_they_claim():
     assert rr.layout.planner == "none" and rr.selection.complementary_fraction == 0.0
     assert rr.selection.wall_count == 0 and rr.selection.on_top_count == 0
     hd = apply_preset({}, "holodeck-style")
-    assert hd.selection.pairing_prob == 1.0 and hd.layout.planner == default.layout.planner
-    assert hd.selection.allowed_classes == list(HOUSEHOLD_CLASSES)
-    assert hd.selection.floor_count < default.selection.floor_count / 4
+    assert hd.selection.strategy == "room-type" and hd.layout.planner == default.layout.planner
+    assert hd.selection.assets_per_class == 2 and hd.selection.on_top_count == 2
+    assert hd.selection.complementary_fraction == 0.0 and default.selection.strategy == "heterogeneous"
     assert apply_preset({}, "no-context").selection.pairing_prob == pytest.approx(0.66)
     assert apply_preset({}, "assist3d").model_dump(exclude={"preset"}) == default.model_dump(exclude={"preset"})
     assert apply_preset({}, "mesh-sampled").render.point_source == "mesh"
@@ -36,17 +36,18 @@ def test_baselines_and_ablations_set_what_they_claim():
 
 
 def test_user_values_override_preset_values():
-    cfg = apply_preset({"selection": {"pairing_prob": 0.2, "floor_count": 7}, "seed": 5}, "holodeck-style")
-    assert cfg.selection.pairing_prob == 0.2 and cfg.selection.floor_count == 7 and cfg.seed == 5
+    cfg = apply_preset({"selection": {"assets_per_class": 5, "room_types": ["office"]}, "seed": 5}, "holodeck-style")
+    assert cfg.selection.assets_per_class == 5 and cfg.selection.room_types == ["office"] and cfg.seed == 5
     # keys the user did not set keep the preset's value (a nested merge, not a replacement)
-    assert cfg.selection.allowed_classes == list(HOUSEHOLD_CLASSES) and cfg.selection.wall_count == 4
+    assert cfg.selection.strategy == "room-type" and cfg.selection.on_top_count == 2
     cfg = apply_preset({"layout": {"planner": "rules"}}, "randomrooms")
     assert cfg.layout.planner == "rules" and cfg.selection.floor_count == 40
     # applying a preset never mutates the preset table, and a config's list is its own
-    assert PRESETS["holodeck-style"]["selection"]["pairing_prob"] == 1.0
-    hd = apply_preset({}, "holodeck-style")
-    hd.selection.allowed_classes.append("spaceship")
-    assert "spaceship" not in HOUSEHOLD_CLASSES and "spaceship" not in apply_preset({}, "holodeck-style").selection.allowed_classes
+    assert PRESETS["holodeck-style"]["selection"]["assets_per_class"] == 2
+    cp = apply_preset({}, "clusters-2")
+    cp.selection.clusters.append(4)
+    assert PRESETS["clusters-2"]["selection"]["clusters"] == [0, 1]
+    assert apply_preset({}, "clusters-2").selection.clusters == [0, 1]
 
 
 def test_unknown_preset_and_bad_user_values_are_named():
@@ -56,12 +57,23 @@ def test_unknown_preset_and_bad_user_values_are_named():
         apply_preset({"selection": {"pairing_prob": 3.0}}, "no-context")
 
 
-def test_household_classes_match_procedural_classes():
-    from assist3d.assets.procedural import FAMILIES, build_family
+def test_room_template_classes_exist_in_their_groups_of_the_procedural_library():
+    """Each floor item of a room template must be a floor class of the procedural library, each
+    wall item a wall class and each small object an on-top class; else the Holodeck-style baseline
+    would silently lose that object on the built-in library."""
+    from assist3d.assets.procedural import FAMILIES, asset_groups, build_family
     from assist3d.scene.classes import canonical_class, normalise_class
+    from assist3d.scene.roomtypes import ROOM_TEMPLATES
 
-    built = {build_family(n, rng=np.random.default_rng(0)).class_name for n in FAMILIES}
-    keys = {normalise_class(c) for c in built} | {canonical_class(c) for c in built}
-    missing = [h for h in HOUSEHOLD_CLASSES if normalise_class(h) not in keys and canonical_class(h) not in keys]
-    assert missing == []
+    keys: dict[str, set[str]] = {"floor": set(), "wall": set(), "obj": set()}
+    for name, fam in FAMILIES.items():
+        for seed in range(12):  # a family's class varies with the seed (bottle / wine bottle)
+            a = build_family(name, rng=np.random.default_rng(seed))
+            for g in asset_groups(fam.groups, a.size):
+                keys[g] |= {normalise_class(a.class_name), canonical_class(a.class_name)}
+    for room, t in ROOM_TEMPLATES.items():
+        for group, names in (("floor", [i.cls for i in t.floor]), ("wall", [i.cls for i in t.wall]),
+                             ("obj", list(t.small))):
+            missing = [n for n in names if n not in keys[group]]
+            assert missing == [], (room, group, missing)
     assert len(set(HOUSEHOLD_CLASSES)) == len(HOUSEHOLD_CLASSES)

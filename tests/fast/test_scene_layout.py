@@ -265,3 +265,28 @@ def test_cli_config_precedence(tmp_path):
     bad.write_text("- a list\n", encoding="utf-8")
     with pytest.raises(ConfigError, match="mapping"):
         compose_config(bad, None, {})
+
+
+def test_holodeck_style_room_places_repeated_models(tmp_path):
+    """The room-type strategy through the real layout stage: a bedroom's bed and its nightstands
+    (copies of one model) are placed as distinct instances, the room type is recorded."""
+    from assist3d.presets import apply_preset
+
+    try:
+        layout_mod._placement_api()
+    except ImportError:
+        pytest.skip("placement engine not available")
+    cat = make_catalog(tmp_path / "cat")
+    cfg = apply_preset({"selection": {"room_types": ["bedroom"], "assets_per_class": None},
+                        "layout": {"group_budget_s": 30.0, "max_backtracks": 200}}, "holodeck-style")
+    for seed in range(4):
+        lay = build_layout(cat, cfg, seed, scene_index=seed)
+        assert lay.stats["selection"]["room_type"] == "bedroom"
+        classes = [i.class_name for i in lay.instances]
+        assert classes.count("bed") == 1 and classes.count("nightstand") >= 1
+        stands = [i for i in lay.instances if i.class_name == "nightstand"]
+        assert len({i.asset for i in stands}) == 1 and len({i.id for i in stands}) == len(stands)
+        bed = next(i for i in lay.instances if i.class_name == "bed")
+        for s in stands:  # next to the bed, not somewhere in the room
+            assert np.hypot(*(s.pose[:2, 3] - bed.pose[:2, 3])) < 2.0
+        assert {i.class_name for i in lay.instances} <= {"bed", "nightstand", "picture", "book", "cup"}

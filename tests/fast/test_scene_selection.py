@@ -197,3 +197,102 @@ def test_assets_per_class_keeps_a_fixed_few_models_per_class(tmp_path):
     for r in sel.floor:
         per_class.setdefault(r.class_name, set()).add(r.id)
     assert any(len(ids) > 1 for ids in per_class.values())
+
+
+# ----------------------------------------------------------------------------- room-type strategy
+
+
+def _room_catalog(tmp_path, drop: tuple[str, ...] = (), per_class: int = 3) -> Catalog:
+    """Three assets of every class named by the room templates, in the template's group; floor
+    and wall assets carry a support surface."""
+    from assist3d.scene.roomtypes import ROOM_TEMPLATES
+
+    recs, seen = [], set()
+    for t in ROOM_TEMPLATES.values():
+        for group, names in (("floor", [i.cls for i in t.floor]), ("wall", [i.cls for i in t.wall]),
+                             ("obj", list(t.small))):
+            for cls in names:
+                if cls in drop or (group, cls) in seen:
+                    continue
+                seen.add((group, cls))
+                sup = (SupportSurface(0.7, ((-0.4, -0.4), (0.4, -0.4), (0.4, 0.4), (-0.4, 0.4))),) \
+                    if group != "obj" else ()
+                size = (0.2, 0.15, 0.1) if group == "obj" else (0.9, 0.6, 0.7)
+                recs += [AssetRecord(id=f"r:{group}:{cls}/{i}", source="test", name=cls, class_name=cls,
+                                     groups=(group,), size=size, supports=sup) for i in range(per_class)]
+    return Catalog(tmp_path / "rooms", recs)
+
+
+def _room(cat, seed=0, scene_index=0, **kw):
+    return _sel(cat, seed=seed, scene_index=scene_index, strategy="room-type", on_top_count=2, **kw)
+
+
+def test_room_type_follows_the_template(tmp_path):
+    from assist3d.scene.roomtypes import ROOM_TEMPLATES
+
+    cat = _room_catalog(tmp_path)
+    for seed in range(8):
+        s = _room(cat, seed=seed, room_types=["dining room"])
+        assert s.stats["room_type"] == "dining room" and not s.complementary
+        classes = [r.class_name for r in s.floor]
+        assert classes.count("dining table") == 1
+        chairs = [r.id for r in s.floor if r.class_name == "chair"]
+        assert 4 <= len(chairs) <= 6 and len(set(chairs)) == 1  # identical copies of one model
+        small = set(ROOM_TEMPLATES["dining room"].small)
+        for items in s.floor_on_top + s.wall_on_top:
+            # an asset matches by its class or its canonical class (a mug is a cup)
+            assert len(items) == 2 and all(r.class_name in small or canonical_class(r.class_name) in small
+                                           for r in items)
+        assert {r.class_name for r in s.wall} <= {i.cls for i in ROOM_TEMPLATES["dining room"].wall}
+        assert len(s.floor) < 100  # floor_count is not used
+        # varied items are drawn anew for each copy: pictures of a room use distinct models (3 exist)
+        pics = [r.id for r in s.wall if r.class_name == "picture"]
+        assert len(set(pics)) == len(pics)
+
+
+def test_room_type_quantities_follow_their_anchor(tmp_path):
+    cat = _room_catalog(tmp_path)
+    for seed in range(12):
+        office = _room(cat, seed=seed, room_types=["office"])
+        classes = [r.class_name for r in office.floor]
+        assert classes.count("office chair") == classes.count("desk") >= 1
+        kitchen = _room(cat, seed=seed, room_types=["kitchen"])
+        classes = [r.class_name for r in kitchen.floor]
+        assert "refrigerator" in classes
+        assert ("chair" in classes) <= ("table" in classes)  # chairs only with a table
+
+
+def test_room_type_is_seeded_and_covers_every_type(tmp_path):
+    from assist3d.scene.roomtypes import ROOM_TEMPLATES
+
+    cat = _room_catalog(tmp_path)
+    a = [_room(cat, seed=s) for s in range(60)]
+    b = [_room(cat, seed=s) for s in range(60)]
+    assert [[r.id for r in x.floor] for x in a] == [[r.id for r in x.floor] for x in b]
+    assert {x.stats["room_type"] for x in a} == set(ROOM_TEMPLATES)
+    # the heterogeneous strategy draws no room type and its draws are unchanged by the new option
+    h = _sel(cat, seed=3, floor_count=10, wall_count=3)
+    assert "room_type" not in h.stats and len(h.floor) == 10
+
+
+def test_room_type_missing_class_is_skipped_and_counted(tmp_path):
+    cat = _room_catalog(tmp_path, drop=("refrigerator", "stove"))
+    s = _room(cat, seed=0, room_types=["kitchen"])
+    classes = {r.class_name for r in s.floor}
+    assert "refrigerator" not in classes and "counter" in classes
+    assert s.stats["template_misses"] >= 1
+
+
+def test_room_type_with_retrieval_reuses_few_models(tmp_path):
+    cat = _room_catalog(tmp_path, per_class=6)
+    used: dict[str, set[str]] = {}
+    for seed in range(30):
+        s = _room(cat, seed=seed, assets_per_class=1)
+        for r in list(s.floor) + list(s.wall) + [r for t in s.floor_on_top + s.wall_on_top for r in t]:
+            used.setdefault(r.class_name, set()).add(r.id)
+    assert used and all(len(ids) == 1 for ids in used.values()), {c: ids for c, ids in used.items() if len(ids) > 1}
+
+
+def test_unknown_room_type_is_a_config_error():
+    with pytest.raises(ValueError, match="unknown room type"):
+        SelectionConfig(room_types=["garage"])

@@ -30,7 +30,8 @@ def asset_features(catalog: Catalog, *, seed: int = 0) -> tuple[list[str], np.nd
     if path.is_file():
         try:
             with np.load(path) as z:
-                if int(z["seed"]) == seed and z["features"].shape[1:] == (FEATURE_DIM,):
+                # caches written before 0-d arrays were kept as such hold the seed as shape (1,)
+                if int(np.asarray(z["seed"]).reshape(-1)[0]) == seed and z["features"].shape[1:] == (FEATURE_DIM,):
                     cached = dict(zip(z["ids"].tolist(), z["features"]))
         except (OSError, KeyError, ValueError):
             log.warning("%s: unreadable feature cache, recomputing", path)

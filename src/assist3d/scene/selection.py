@@ -18,6 +18,10 @@ On-top draws for a support are, by default (``on_top_fit``), taken among the on-
 box fits one of its surfaces (footprint either way round, height under the clearance): a drawer
 cannot hold a television, and drawing one only to drop it wastes the search budget.
 
+``strategy: room-type`` replaces the random floor and wall draws by a Holodeck-style room: a room
+type drawn per scene and its typical object list (:mod:`assist3d.scene.roomtypes`), with on-top
+draws restricted to the room's small-object classes.
+
 Ablation controls: ``pairing_prob`` q co-selects each drawn class's partner class, ``clusters``
 keeps only some shape clusters, ``allowed_classes`` and ``max_classes`` restrict the class pool,
 ``assets_per_class`` keeps a fixed few models per class (retrieval-style baselines).
@@ -38,6 +42,7 @@ from ..contracts import AssetRecord
 from ..errors import ConfigError
 from ..rng import make_rng
 from .classes import ClassList, canonical_class, normalise_class, resolve_class_list
+from .roomtypes import ROOM_TEMPLATES, Item
 
 log = logging.getLogger(__name__)
 
@@ -86,6 +91,14 @@ class _Pool:
             by_class.setdefault(r.class_name, []).append(r)
         self.classes = tuple(sorted(by_class))
         self.by_class = {c: tuple(v) for c, v in by_class.items()}
+        self._by_name: dict[str, tuple[str, ...]] = {}
+        for c in self.classes:
+            for key in {normalise_class(c), canonical_class(c)}:
+                self._by_name[key] = self._by_name.get(key, ()) + (c,)
+
+    def matching(self, name: str) -> tuple[str, ...]:
+        """The pool's classes whose name or canonical name is ``name`` (a canonical class name)."""
+        return self._by_name.get(normalise_class(name), ())
 
     def __bool__(self) -> bool:
         return bool(self.records)
@@ -243,6 +256,34 @@ class _Drawer:
         return out
 
 
+def _template_draw(pool: _Pool, items: tuple[Item, ...], rng: np.random.Generator, used: set[str],
+                   stats: dict) -> list[AssetRecord]:
+    """The assets of one room-template group: items in order, each kept with its probability,
+    with its quantity (one model repeated when ``same``); an item whose class the pool lacks is
+    skipped and counted in ``stats["template_misses"]``."""
+    out: list[AssetRecord] = []
+    chosen: dict[str, int] = {}
+    for it in items:
+        if it.needs is not None and not chosen.get(it.needs):
+            continue
+        if rng.random() >= it.prob:
+            continue
+        n = chosen.get(it.per, 0) if it.per is not None else int(rng.integers(it.count[0], it.count[1] + 1))
+        if n <= 0:
+            continue
+        classes = pool.matching(it.cls)
+        if not classes:
+            stats["template_misses"] += 1
+            continue
+        cls = classes[int(rng.integers(len(classes)))]
+        if it.same:
+            out += [pool.draw_asset(cls, rng, used)] * n
+        else:
+            out += [pool.draw_asset(cls, rng, used) for _ in range(n)]
+        chosen[it.cls] = chosen.get(it.cls, 0) + n
+    return out
+
+
 def fits_support_mask(parent: AssetRecord, sizes: np.ndarray) -> np.ndarray:
     """(n,) bool: which boxes (``sizes`` (n, 3) float64, w x d x h) fit on one of ``parent``'s support
     surfaces: footprint within the surface's bounding box either way round, height within its
@@ -267,9 +308,15 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
     The same ``rng`` state gives the same selection. Raises :class:`ConfigError` when the floor pool
     is empty after the filters while floor objects are requested.
     """
-    complementary = is_complementary(scene_index, cfg.complementary_fraction)
+    room_type: str | None = None
+    if cfg.strategy == "room-type":
+        names = tuple(cfg.room_types or ROOM_TEMPLATES)
+        room_type = names[int(rng.integers(len(names)))]
+    complementary = room_type is None and is_complementary(scene_index, cfg.complementary_fraction)
     classes: ClassList | None = resolve_class_list(cfg.real_classes) if complementary else None
     stats = {"complementary": complementary, "draws": 0, "real_draws": 0, "partner_draws": 0}
+    if room_type is not None:
+        stats.update(room_type=room_type, template_misses=0)
     fkey = _filter_key(cfg)
     pools = {g: _CACHE.get(catalog, ("pool", fkey, g), lambda g=g: _Pool(_filter(catalog.group(g), cfg, catalog)))
              for g in ("floor", "wall", "obj")}
@@ -281,7 +328,12 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
     used: set[str] = set()
     partners = {g: _CACHE.get(catalog, ("partners", fkey, g),
                               lambda pool=pool, g=g: partner_map(pool.classes, cfg.class_pool_seed, g))
-                if cfg.pairing_prob > 0 else {} for g, pool in pools.items()}
+                if cfg.pairing_prob > 0 and room_type is None else {} for g, pool in pools.items()}
+    if room_type is not None:
+        small = set(ROOM_TEMPLATES[room_type].small)
+        pools["obj"] = _CACHE.get(catalog, ("room-obj", fkey, room_type), lambda: _Pool(tuple(
+            r for r in pools["obj"].records if normalise_class(r.class_name) in small
+            or canonical_class(r.class_name) in small)))
 
     real_classes = ({c for pool in pools.values() for c in pool.classes if classes.match(c) is not None}
                     if classes is not None else set())
@@ -304,7 +356,7 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
 
     drawers = {g: _Drawer(pool, real_of(pool, g, ("pool", fkey, g)), cfg, complementary, partners[g], used, stats)
                for g, pool in pools.items()}
-    obj_sizes = _CACHE.get(catalog, ("sizes", fkey), lambda: np.array(
+    obj_sizes = _CACHE.get(catalog, ("sizes", fkey, room_type), lambda: np.array(
         [r.size for r in pools["obj"].records], dtype=np.float64).reshape(-1, 3))
     fit_drawers: dict[str, _Drawer | None] = {}
     warned: set[str] = set()
@@ -329,7 +381,7 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
                 mask = fits_support_mask(parent, obj_sizes)
                 return _Pool(tuple(r for r, m in zip(pools["obj"].records, mask) if m))
 
-            sub = _CACHE.get(catalog, ("fit", fkey, parent.id, parent.supports), build_fit)
+            sub = _CACHE.get(catalog, ("fit", fkey, room_type, parent.id, parent.supports), build_fit)
             real_sub = real_of(sub, "fit", ("fit", fkey, parent.id, parent.supports))
             fit_drawers[parent.id] = (_Drawer(sub, real_sub, cfg, complementary, partners["obj"], used, stats)
                                       if sub else None)
@@ -340,8 +392,13 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
         return tuple(drawer.draw(cfg.on_top_count, rng))
 
     stats["no_fitting_on_top"] = 0
-    floor = group_draw("floor", cfg.floor_count)
-    wall = group_draw("wall", cfg.wall_count)
+    if room_type is None:
+        floor = group_draw("floor", cfg.floor_count)
+        wall = group_draw("wall", cfg.wall_count)
+    else:
+        template = ROOM_TEMPLATES[room_type]
+        floor = _template_draw(pools["floor"], template.floor, rng, used, stats)
+        wall = _template_draw(pools["wall"], template.wall, rng, used, stats)
     floor_on_top = tuple(on_top_draw(r) for r in floor)
     wall_on_top = tuple(on_top_draw(r) for r in wall)
     return Selection(tuple(floor), tuple(wall), floor_on_top, wall_on_top, complementary, stats)
