@@ -253,11 +253,11 @@ def test_cli_config_precedence(tmp_path):
     from assist3d.errors import ConfigError
 
     f = tmp_path / "c.yaml"
-    f.write_text("selection: {floor_count: 9}\nllm: {model: from-file}\n", encoding="utf-8")
+    f.write_text("selection: {on_top_count: 1}\nllm: {model: from-file}\n", encoding="utf-8")
     cfg = compose_config(f, "holodeck-style", {"llm": {"model": "from-flag"}})
     assert cfg.preset == "holodeck-style"
-    assert cfg.selection.floor_count == 9  # the file beats the preset (14)
-    assert cfg.selection.pairing_prob == 1.0  # the preset beats the defaults
+    assert cfg.selection.on_top_count == 1  # the file beats the preset (2)
+    assert cfg.selection.strategy == "room-type"  # the preset beats the defaults
     assert cfg.llm.model == "from-flag"  # the flag beats the file
     with pytest.raises(ConfigError, match="did you mean"):
         compose_config(None, "holodek-style", {})

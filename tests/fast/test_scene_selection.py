@@ -239,10 +239,13 @@ def test_room_type_follows_the_template(tmp_path):
         chairs = [r.id for r in s.floor if r.class_name == "chair"]
         assert 4 <= len(chairs) <= 6 and len(set(chairs)) == 1  # identical copies of one model
         small = set(ROOM_TEMPLATES["dining room"].small)
-        for items in s.floor_on_top + s.wall_on_top:
+        holders = {i.cls for i in ROOM_TEMPLATES["dining room"].floor + ROOM_TEMPLATES["dining room"].wall if i.holds}
+        for parent, items in zip(s.floor + s.wall, s.floor_on_top + s.wall_on_top):
+            # small objects go on tables and cabinets, not on chairs, pictures or plants
+            assert len(items) == (2 if parent.class_name in holders else 0), parent.class_name
             # an asset matches by its class or its canonical class (a mug is a cup)
-            assert len(items) == 2 and all(r.class_name in small or canonical_class(r.class_name) in small
-                                           for r in items)
+            assert all(r.class_name in small or canonical_class(r.class_name) in small for r in items)
+        assert len(s.floor_on_top[classes.index("dining table")]) == 2
         assert {r.class_name for r in s.wall} <= {i.cls for i in ROOM_TEMPLATES["dining room"].wall}
         assert len(s.floor) < 100  # floor_count is not used
         # varied items are drawn anew for each copy: pictures of a room use distinct models (3 exist)

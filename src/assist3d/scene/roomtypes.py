@@ -29,7 +29,8 @@ class Item:
     ``prob``: probability that a room of this type has the item; ``count``: inclusive range of its
     quantity; ``same``: the copies are one model repeated (else each copy is drawn anew);
     ``per``: the quantity is one per selected item of that class instead (an office chair per
-    desk); ``needs``: only with an item of that class in the room."""
+    desk); ``needs``: only with an item of that class in the room; ``holds``: small objects may be
+    put on it (False for seats, beds and fixtures: nobody puts a vase on a dining chair)."""
 
     cls: str
     prob: float = 1.0
@@ -37,6 +38,7 @@ class Item:
     same: bool = True
     per: str | None = None
     needs: str | None = None
+    holds: bool = True
 
 
 @dataclass(frozen=True)
@@ -54,52 +56,57 @@ class RoomTemplate:
 
 ROOM_TEMPLATES: dict[str, RoomTemplate] = {
     "bedroom": RoomTemplate(
-        floor=(Item("bed"), Item("nightstand", 0.9, (1, 2)), Item("wardrobe", 0.8), Item("dresser", 0.6),
-               Item("lamp", 0.5), Item("desk", 0.3), Item("office chair", per="desk"), Item("armchair", 0.2),
-               Item("plant", 0.3), Item("trash can", 0.3)),
-        wall=(Item("picture", 0.9, (1, 3), same=False), Item("curtain", 0.7), Item("mirror", 0.5),
-              Item("clock", 0.3)),
+        floor=(Item("bed", holds=False), Item("nightstand", 0.9, (1, 2)), Item("wardrobe", 0.8),
+               Item("dresser", 0.6), Item("lamp", 0.5, holds=False), Item("desk", 0.3),
+               Item("office chair", per="desk", holds=False), Item("armchair", 0.2, holds=False),
+               Item("plant", 0.3, holds=False), Item("trash can", 0.3, holds=False)),
+        wall=(Item("picture", 0.9, (1, 3), same=False, holds=False), Item("curtain", 0.7, holds=False),
+              Item("mirror", 0.5, holds=False), Item("clock", 0.3, holds=False)),
         small=("pillow", "book", "alarm clock", "lamp", "vase", "cup", "phone", "tissue box", "plant", "candle",
                "stuffed animal"),
     ),
     "living room": RoomTemplate(
-        floor=(Item("sofa"), Item("coffee table"), Item("armchair", 0.8, (1, 2)), Item("tv stand", 0.9),
-               Item("end table", 0.6, (1, 2)), Item("bookshelf", 0.6), Item("plant", 0.6, (1, 2), same=False),
-               Item("lamp", 0.6), Item("ottoman", 0.3), Item("shelf", 0.3)),
-        wall=(Item("tv", 0.8), Item("picture", 0.9, (1, 3), same=False), Item("curtain", 0.7),
-              Item("clock", 0.4), Item("mirror", 0.2)),
+        floor=(Item("sofa", holds=False), Item("coffee table"), Item("armchair", 0.8, (1, 2), holds=False),
+               Item("tv stand", 0.9), Item("end table", 0.6, (1, 2)), Item("bookshelf", 0.6),
+               Item("plant", 0.6, (1, 2), same=False, holds=False), Item("lamp", 0.6, holds=False),
+               Item("ottoman", 0.3, holds=False), Item("shelf", 0.3)),
+        wall=(Item("tv", 0.8, holds=False), Item("picture", 0.9, (1, 3), same=False, holds=False),
+              Item("curtain", 0.7, holds=False), Item("clock", 0.4, holds=False), Item("mirror", 0.2, holds=False)),
         small=("vase", "book", "remote control", "plant", "cup", "mug", "bowl", "candle", "tray", "sculpture",
                "speaker", "fruit bowl", "game controller"),
     ),
     "dining room": RoomTemplate(
-        floor=(Item("dining table"), Item("chair", 1.0, (4, 6)), Item("cabinet", 0.6), Item("shelf", 0.4),
-               Item("plant", 0.5), Item("lamp", 0.3)),
-        wall=(Item("picture", 0.8, (1, 2), same=False), Item("clock", 0.5), Item("mirror", 0.3),
-              Item("curtain", 0.6)),
+        floor=(Item("dining table"), Item("chair", 1.0, (4, 6), holds=False), Item("cabinet", 0.6),
+               Item("shelf", 0.4), Item("plant", 0.5, holds=False), Item("lamp", 0.3, holds=False)),
+        wall=(Item("picture", 0.8, (1, 2), same=False, holds=False), Item("clock", 0.5, holds=False),
+              Item("mirror", 0.3, holds=False), Item("curtain", 0.6, holds=False)),
         small=("plate", "bowl", "cup", "glass", "vase", "fruit bowl", "wine bottle", "candle", "bottle", "teapot",
                "tray"),
     ),
     "kitchen": RoomTemplate(
-        floor=(Item("counter", 1.0, (1, 3)), Item("refrigerator"), Item("stove", 0.9), Item("sink", 0.9),
-               Item("dishwasher", 0.5), Item("table", 0.5), Item("chair", 1.0, (2, 4), needs="table"),
-               Item("stool", 0.3, (2, 3)), Item("trash can", 0.7)),
-        wall=(Item("kitchen cabinet", 1.0, (2, 4)), Item("clock", 0.4), Item("paper towel dispenser", 0.3),
-              Item("shelf", 0.3)),
+        floor=(Item("counter", 1.0, (1, 3)), Item("refrigerator", holds=False), Item("stove", 0.9, holds=False),
+               Item("sink", 0.9, holds=False), Item("dishwasher", 0.5), Item("table", 0.5),
+               Item("chair", 1.0, (2, 4), needs="table", holds=False), Item("stool", 0.3, (2, 3), holds=False),
+               Item("trash can", 0.7, holds=False)),
+        wall=(Item("kitchen cabinet", 1.0, (2, 4)), Item("clock", 0.4, holds=False),
+              Item("paper towel dispenser", 0.3, holds=False), Item("shelf", 0.3)),
         small=("microwave", "kettle", "toaster", "coffee maker", "blender", "pot", "pan", "cutting board", "bowl",
                "plate", "cup", "mug", "bottle", "jar", "fruit bowl"),
     ),
     "bathroom": RoomTemplate(
-        floor=(Item("toilet"), Item("sink"), Item("bathtub", 0.6), Item("shower", 0.4), Item("cabinet", 0.4),
-               Item("trash can", 0.6), Item("laundry basket", 0.3)),
-        wall=(Item("mirror"), Item("towel", 0.8, (1, 2)), Item("bathroom cabinet", 0.5),
-              Item("soap dispenser", 0.4), Item("shower curtain", 0.3)),
+        floor=(Item("toilet", holds=False), Item("sink", holds=False), Item("bathtub", 0.6, holds=False),
+               Item("shower", 0.4, holds=False), Item("cabinet", 0.4), Item("trash can", 0.6, holds=False),
+               Item("laundry basket", 0.3, holds=False)),
+        wall=(Item("mirror", holds=False), Item("towel", 0.8, (1, 2), holds=False), Item("bathroom cabinet", 0.5),
+              Item("soap dispenser", 0.4, holds=False), Item("shower curtain", 0.3, holds=False)),
         small=("soap bottle", "toilet paper", "spray bottle", "bottle", "cup", "tissue box", "vase", "candle"),
     ),
     "office": RoomTemplate(
-        floor=(Item("desk", 1.0, (1, 2)), Item("office chair", per="desk"), Item("bookshelf", 0.7),
-               Item("file cabinet", 0.6), Item("cabinet", 0.3), Item("plant", 0.5), Item("trash can", 0.7)),
-        wall=(Item("whiteboard", 0.5), Item("picture", 0.6, (1, 2), same=False), Item("clock", 0.5),
-              Item("bulletin board", 0.4), Item("shelf", 0.3)),
+        floor=(Item("desk", 1.0, (1, 2)), Item("office chair", per="desk", holds=False), Item("bookshelf", 0.7),
+               Item("file cabinet", 0.6), Item("cabinet", 0.3), Item("plant", 0.5, holds=False),
+               Item("trash can", 0.7, holds=False)),
+        wall=(Item("whiteboard", 0.5, holds=False), Item("picture", 0.6, (1, 2), same=False, holds=False),
+              Item("clock", 0.5, holds=False), Item("bulletin board", 0.4, holds=False), Item("shelf", 0.3)),
         small=("monitor", "keyboard", "computer mouse", "laptop", "book", "binder", "pen holder", "stapler", "phone",
                "mug", "lamp", "paper", "printer", "headphones"),
     ),

@@ -257,11 +257,13 @@ class _Drawer:
 
 
 def _template_draw(pool: _Pool, items: tuple[Item, ...], rng: np.random.Generator, used: set[str],
-                   stats: dict) -> list[AssetRecord]:
+                   stats: dict) -> tuple[list[AssetRecord], list[bool]]:
     """The assets of one room-template group: items in order, each kept with its probability,
     with its quantity (one model repeated when ``same``); an item whose class the pool lacks is
-    skipped and counted in ``stats["template_misses"]``."""
+    skipped and counted in ``stats["template_misses"]``. Also returns, per asset, whether small
+    objects may be put on it (the item's ``holds``)."""
     out: list[AssetRecord] = []
+    holds: list[bool] = []
     chosen: dict[str, int] = {}
     for it in items:
         if it.needs is not None and not chosen.get(it.needs):
@@ -280,8 +282,9 @@ def _template_draw(pool: _Pool, items: tuple[Item, ...], rng: np.random.Generato
             out += [pool.draw_asset(cls, rng, used)] * n
         else:
             out += [pool.draw_asset(cls, rng, used) for _ in range(n)]
+        holds += [it.holds] * n
         chosen[it.cls] = chosen.get(it.cls, 0) + n
-    return out
+    return out, holds
 
 
 def fits_support_mask(parent: AssetRecord, sizes: np.ndarray) -> np.ndarray:
@@ -371,8 +374,8 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
             return []
         return drawers[g].draw(n, rng)
 
-    def on_top_draw(parent: AssetRecord) -> tuple[AssetRecord, ...]:
-        if not parent.supports or cfg.on_top_count <= 0:
+    def on_top_draw(parent: AssetRecord, holds: bool = True) -> tuple[AssetRecord, ...]:
+        if not holds or not parent.supports or cfg.on_top_count <= 0:
             return ()
         if not cfg.on_top_fit:
             return tuple(group_draw("obj", cfg.on_top_count))
@@ -395,10 +398,11 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
     if room_type is None:
         floor = group_draw("floor", cfg.floor_count)
         wall = group_draw("wall", cfg.wall_count)
+        floor_holds, wall_holds = [True] * len(floor), [True] * len(wall)
     else:
         template = ROOM_TEMPLATES[room_type]
-        floor = _template_draw(pools["floor"], template.floor, rng, used, stats)
-        wall = _template_draw(pools["wall"], template.wall, rng, used, stats)
-    floor_on_top = tuple(on_top_draw(r) for r in floor)
-    wall_on_top = tuple(on_top_draw(r) for r in wall)
+        floor, floor_holds = _template_draw(pools["floor"], template.floor, rng, used, stats)
+        wall, wall_holds = _template_draw(pools["wall"], template.wall, rng, used, stats)
+    floor_on_top = tuple(on_top_draw(r, h) for r, h in zip(floor, floor_holds))
+    wall_on_top = tuple(on_top_draw(r, h) for r, h in zip(wall, wall_holds))
     return Selection(tuple(floor), tuple(wall), floor_on_top, wall_on_top, complementary, stats)
