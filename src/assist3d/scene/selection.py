@@ -96,9 +96,23 @@ class _Pool:
             for key in {normalise_class(c), canonical_class(c)}:
                 self._by_name[key] = self._by_name.get(key, ()) + (c,)
 
+        self._models: dict[tuple, tuple[AssetRecord, ...]] = {}
+
     def matching(self, name: str) -> tuple[str, ...]:
         """The pool's classes whose name or canonical name is ``name`` (a canonical class name)."""
         return self._by_name.get(normalise_class(name), ())
+
+    def item_models(self, name: str, n: int | None, seed: int) -> tuple[AssetRecord, ...]:
+        """What a text retrieval for ``name`` returns, the same in every scene: the assets of every
+        matching class (sorted by id), or a seeded, fixed ``n`` of them."""
+        key = (name, n, seed)
+        if key not in self._models:
+            recs = sorted((r for c in self.matching(name) for r in self.by_class[c]), key=lambda r: r.id)
+            if n is not None and len(recs) > n:
+                keep = make_rng(seed, "retrieval", normalise_class(name)).permutation(len(recs))[:n]
+                recs = [recs[int(i)] for i in sorted(keep)]
+            self._models[key] = tuple(recs)
+        return self._models[key]
 
     def __bool__(self) -> bool:
         return bool(self.records)
@@ -257,11 +271,12 @@ class _Drawer:
 
 
 def _template_draw(pool: _Pool, items: tuple[Item, ...], rng: np.random.Generator, used: set[str],
-                   stats: dict) -> tuple[list[AssetRecord], list[bool]]:
+                   stats: dict, cfg: SelectionConfig) -> tuple[list[AssetRecord], list[bool]]:
     """The assets of one room-template group: items in order, each kept with its probability,
-    with its quantity (one model repeated when ``same``); an item whose class the pool lacks is
-    skipped and counted in ``stats["template_misses"]``. Also returns, per asset, whether small
-    objects may be put on it (the item's ``holds``)."""
+    with its quantity (one model repeated when ``same``), drawn from the item's retrieved models
+    (``assets_per_class`` of them when set, across every class matching the item); an item the
+    pool has no model for is skipped and counted in ``stats["template_misses"]``. Also returns,
+    per asset, whether small objects may be put on it (the item's ``holds``)."""
     out: list[AssetRecord] = []
     holds: list[bool] = []
     chosen: dict[str, int] = {}
@@ -273,15 +288,19 @@ def _template_draw(pool: _Pool, items: tuple[Item, ...], rng: np.random.Generato
         n = chosen.get(it.per, 0) if it.per is not None else int(rng.integers(it.count[0], it.count[1] + 1))
         if n <= 0:
             continue
-        classes = pool.matching(it.cls)
-        if not classes:
+        models = pool.item_models(it.cls, cfg.assets_per_class, cfg.class_pool_seed)
+        if not models:
             stats["template_misses"] += 1
             continue
-        cls = classes[int(rng.integers(len(classes)))]
-        if it.same:
-            out += [pool.draw_asset(cls, rng, used)] * n
-        else:
-            out += [pool.draw_asset(cls, rng, used) for _ in range(n)]
+
+        def take() -> AssetRecord:
+            fresh = [r for r in models if r.id not in used]
+            pick = fresh if fresh else models
+            rec = pick[int(rng.integers(len(pick)))]
+            used.add(rec.id)
+            return rec
+
+        out += [take()] * n if it.same else [take() for _ in range(n)]
         holds += [it.holds] * n
         chosen[it.cls] = chosen.get(it.cls, 0) + n
     return out, holds
@@ -333,10 +352,10 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
                               lambda pool=pool, g=g: partner_map(pool.classes, cfg.class_pool_seed, g))
                 if cfg.pairing_prob > 0 and room_type is None else {} for g, pool in pools.items()}
     if room_type is not None:
-        small = set(ROOM_TEMPLATES[room_type].small)
-        pools["obj"] = _CACHE.get(catalog, ("room-obj", fkey, room_type), lambda: _Pool(tuple(
-            r for r in pools["obj"].records if normalise_class(r.class_name) in small
-            or canonical_class(r.class_name) in small)))
+        small, obj_pool = ROOM_TEMPLATES[room_type].small, pools["obj"]
+        pools["obj"] = _CACHE.get(catalog, ("room-obj", fkey, room_type), lambda: _Pool(tuple({
+            r.id: r for name in small for r in obj_pool.item_models(name, cfg.assets_per_class, cfg.class_pool_seed)
+        }.values())))
 
     real_classes = ({c for pool in pools.values() for c in pool.classes if classes.match(c) is not None}
                     if classes is not None else set())
@@ -401,8 +420,8 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
         floor_holds, wall_holds = [True] * len(floor), [True] * len(wall)
     else:
         template = ROOM_TEMPLATES[room_type]
-        floor, floor_holds = _template_draw(pools["floor"], template.floor, rng, used, stats)
-        wall, wall_holds = _template_draw(pools["wall"], template.wall, rng, used, stats)
+        floor, floor_holds = _template_draw(pools["floor"], template.floor, rng, used, stats, cfg)
+        wall, wall_holds = _template_draw(pools["wall"], template.wall, rng, used, stats, cfg)
     floor_on_top = tuple(on_top_draw(r, h) for r, h in zip(floor, floor_holds))
     wall_on_top = tuple(on_top_draw(r, h) for r, h in zip(wall, wall_holds))
     return Selection(tuple(floor), tuple(wall), floor_on_top, wall_on_top, complementary, stats)
