@@ -101,3 +101,27 @@ def test_down_and_up_equal_dense(backend):
     _close(feats.grad, feats2.grad)
     _close(down.weight.grad.reshape(2, 2, 2, 3, 4).permute(4, 3, 0, 1, 2), dense_w.grad)
     _close(up.weight.grad.reshape(2, 2, 2, 4, 2).permute(3, 4, 0, 1, 2), up_w.grad)
+
+
+@pytest.mark.skipif(not spconv_backend.available(), reason="spconv not installed")
+def test_spconv_cpu_calls_run_single_threaded(monkeypatch):
+    """spconv's CPU kernels race on PyTorch's thread pool (wrong rows now and then with 2 threads):
+    every CPU call must run with one intra-op thread, and the caller's setting comes back."""
+    seen = []
+    m = spconv_backend._module("subm", 4, 5, 3)
+    real = m._conv_forward
+
+    def spy(*a, **k):
+        seen.append(torch.get_num_threads())
+        return real(*a, **k)
+
+    monkeypatch.setattr(m, "_conv_forward", spy)
+    before = torch.get_num_threads()
+    torch.set_num_threads(2)
+    try:
+        gen = torch.Generator().manual_seed(0)
+        coords = _random_sites(gen, 1, 6, 40)
+        spconv_backend.subm_conv(coords, torch.randn(40, 4, generator=gen), torch.randn(27, 4, 5, generator=gen), 3)
+        assert seen == [1] and torch.get_num_threads() == 2
+    finally:
+        torch.set_num_threads(before)
