@@ -66,9 +66,33 @@ def test_generated_dataset_summary_uses_manifest_catalog(tmp_path):
     assert s.scene_classes == [{"box", "tall"}, {"box"}]
     expected = [score_layout(lay, cat).score for lay in layouts]
     assert s.layout_scores == expected and expected[1] < expected[0]
-    row = metrics_table([s], shared_codebook([s], seed=0))[f"assist3d:{tmp_path / 'ds'}"]
+    # keyed by the dataset as given (a bare folder); its FORMAT:PATH form is under "dataset"
+    row = metrics_table([s], shared_codebook([s], seed=0))[str(tmp_path / "ds")]
+    assert row["dataset"] == f"assist3d:{tmp_path / 'ds'}"
     assert set(row) >= {"geometry_diversity", "context_complexity", "layout_score", "scenes", "instances"}
     assert row["layout_score"] == round(float(np.mean(expected)), 2)
     # box: P(tall | box) = 1/2; tall: P(box | tall) = 1
     assert row["context_complexity"] == 0.75
     assert 0 <= row["geometry_diversity"] <= math.log(row["codes"]) + 1e-3
+
+
+def test_metrics_cli_json_keys_are_the_datasets_as_given(tmp_path, monkeypatch):
+    """`assist3d metrics DIR FORMAT:PATH --json`: one row per argument, keyed by the argument."""
+    from typer.testing import CliRunner
+
+    from assist3d.cli import app
+
+    room = Room(((0, 0), (4, 0), (4, 3), (0, 3)), 2.6, ())
+    layouts = [SceneLayout(room, (PlacedInstance(1, "box", "box", "floor", _pose(1, 1)),
+                                  PlacedInstance(2, "tall", "tall", "floor", _pose(3, 2))), (), seed=0, seconds=0.0)]
+    _write_dataset(tmp_path / "ds", tmp_path / "lib", layouts)
+    monkeypatch.chdir(tmp_path)
+    res = CliRunner().invoke(app, ["metrics", "ds", "assist3d:ds", "--json"])
+    assert res.exit_code == 0, res.output
+    table = json.loads(res.stdout.strip().splitlines()[-1])
+    assert list(table) == ["ds", "assist3d:ds"]
+    assert table["ds"]["dataset"] == table["assist3d:ds"]["dataset"] == "assist3d:ds"
+    for row in table.values():
+        assert {"geometry_diversity", "context_complexity", "layout_score", "scenes", "instances"} <= set(row)
+        assert row["scenes"] == 1 and row["instances"] == 2
+    assert table["ds"]["geometry_diversity"] == table["assist3d:ds"]["geometry_diversity"]

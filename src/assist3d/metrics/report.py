@@ -29,7 +29,8 @@ POOL_PER_DATASET = 4000
 class DatasetSummary:
     """Everything the metrics need from one dataset, gathered in one pass over its scenes."""
 
-    name: str
+    name: str  # the dataset as the user named it (the key of the metrics table)
+    spec: str = ""  # FORMAT:PATH (a bare folder gets "assist3d:")
     scenes: int = 0
     instances: int = 0
     features: np.ndarray = field(default_factory=lambda: np.zeros((0, FEATURE_DIM), np.float32))
@@ -82,9 +83,9 @@ def summarize_dataset(spec: str, *, assets: str | None = None, max_scenes: int |
     """Read a dataset once: instance descriptors, per-scene class sets, layout scores."""
     from ..data import open_dataset
 
-    spec = normalise_spec(spec)
+    given, spec = spec, normalise_spec(spec)
     ds = open_dataset(spec)
-    summary = DatasetSummary(name=spec)
+    summary = DatasetSummary(name=given, spec=spec)
     fmt = spec.split(":", 1)[0]
     catalog = None
     if fmt == "assist3d":
@@ -165,8 +166,9 @@ def shared_codebook(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: in
 
 
 def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook) -> dict:
-    """``{name: {"geometry_diversity", "context_complexity", "layout_score", "scenes", "instances", ...}}``;
-    a metric that cannot be computed is None, with the reason under ``"notes"``."""
+    """``{name: {"geometry_diversity", "context_complexity", "layout_score", "scenes", "instances", ...}}``
+    keyed by each dataset as the user named it (``"dataset"`` holds its ``FORMAT:PATH`` form); a
+    metric that cannot be computed is None, with the reason under ``"notes"``."""
     out = {}
     for s in summaries:
         notes = {}
@@ -192,6 +194,7 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook) -> di
             "layout_components": comps,
             "vlm_layout_score": round(float(np.mean(s.vlm_scores)), 2) if s.vlm_scores else None,
             "codes": len(codebook.centers),
+            "dataset": s.spec or s.name,
         }
         if notes:
             row["notes"] = notes
