@@ -28,12 +28,13 @@ from typing import Any
 import numpy as np
 
 from ..config import LLMConfig
-from ..contracts import Relation
+from ..contracts import Relation, Room
 from ..errors import ConfigError, LLMError
 from ..scene.relations import CROSS_GROUP, GroupPlan, PlannedObject, Planner, PlanRequest, validate_plan
 from .cache import ResponseCache
 from .client import ChatAnswer, ChatClient, Usage
 from .prompts import render_plan_messages, render_repair_message
+from .rooms import check_room_answer, room_messages
 from .schema import CheckedAnswer, check_answer, parse_json_text, salvage_objects
 
 log = logging.getLogger(__name__)
@@ -110,6 +111,32 @@ class LLMPlanner:
             fb = self.fallback.plan(request, rng=rng)
             return self._with_stats(fb, usage, repairs, (reason, *fb.notes), t0)
         return self._with_stats(plan, usage, repairs, plan.notes, t0)
+
+    def propose_room(self, room_type: str, room: Room, vocab: dict[str, tuple[str, ...]]) -> tuple[Any, dict]:
+        """The objects of a ``room_type`` as the model chooses them (Holodeck's object plan):
+        ``(RoomTemplate or None, stats)``; None (the built-in template is then used) when the call
+        fails or the answer has no usable floor object, with the reason in ``stats["notes"]``."""
+        usage = Usage()
+        t0 = time.monotonic()
+        notes: list[str] = []
+        template = None
+        try:
+            answer = self.client.complete(room_messages(room_type, room, vocab, self.cfg.prompt_dir), usage=usage)
+            data, err = parse_json_text(answer.content)
+            if err is not None:
+                raise LLMError(err)
+            template, problems = check_room_answer(data, room_type, vocab)
+            notes += [f"room objects: {p}" for p in problems]
+            if template is None:
+                raise LLMError("; ".join(problems[-3:]))
+        except LLMError as e:
+            notes.append(f"LLM room objects failed for a {room_type} ({e}); the built-in template was used")
+            log.warning("%s: %s", self.name, notes[-1])
+        stats: dict[str, Any] = usage.as_dict()
+        stats["llm_seconds"] = round(usage.seconds, 4)
+        stats["seconds"] = round(time.monotonic() - t0, 4)
+        stats["notes"] = notes
+        return template, stats
 
     def _with_stats(self, plan: GroupPlan, usage: Usage, repairs: int, notes: tuple[str, ...],
                     t0: float) -> GroupPlan:

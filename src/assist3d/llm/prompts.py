@@ -1,7 +1,7 @@
 """Prompt templates: editable data files rendered into chat messages.
 
 Templates live in ``assist3d/resources/prompts/`` (``floor.txt``, ``wall.txt``, ``on_top.txt``,
-``vlm_score.txt``, ``repair.txt``); ``llm.prompt_dir`` may name a folder whose files override the
+``vlm_score.txt``, ``repair.txt``, ``room_objects.txt``); ``llm.prompt_dir`` may name a folder whose files override the
 built-in ones file by file. A template holds a ``### system`` and a ``### user`` section (lines
 before the first section marker are comments for the editor) and ``$name`` template fields filled
 with :class:`string.Template` (write ``$$`` for a literal dollar sign):
@@ -26,7 +26,7 @@ from ..errors import ConfigError
 from ..scene.relations import CROSS_GROUP, RELATIONS, PlanRequest, group_kind
 
 TEMPLATE_FILES = {"floor": "floor.txt", "wall": "wall.txt", "on": "on_top.txt", "vlm": "vlm_score.txt",
-                  "repair": "repair.txt"}
+                  "repair": "repair.txt", "room": "room_objects.txt"}
 _NAME_MAX = 60
 
 

@@ -210,8 +210,18 @@ def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_inde
     t0 = time.perf_counter()
     planner = planner if planner is not None else make_planner(cfg)
     room = sample_room(cfg.room, make_rng(seed, "room"))
-    sel: Selection = select_objects(catalog, cfg.selection, make_rng(seed, "select"), scene_index=scene_index)
+    propose = None
+    if cfg.selection.strategy == "room-type" and hasattr(planner, "propose_room"):
+        def propose(room_type: str, vocab: dict[str, tuple[str, ...]]):
+            return planner.propose_room(room_type, room, vocab)
+    sel: Selection = select_objects(catalog, cfg.selection, make_rng(seed, "select"), scene_index=scene_index,
+                                    propose=propose)
     run = _Run(catalog, cfg, seed, planner, room)
+    room_llm = sel.stats.get("room_llm")
+    if room_llm:  # the LLM's object plan counts with the planning calls
+        for k in ("llm_calls", "cache_hits", "prompt_tokens", "completion_tokens", "llm_seconds"):
+            run.plan_stats[k] += room_llm.get(k, 0)
+        run.notes.extend(str(n) for n in room_llm.get("notes", ()))
     random_mode = cfg.layout.planner == "none"
     floor_ids = run.run_group("floor", sel.floor, None, random_mode) if sel.floor else []
     wall_ids = run.run_group("wall", sel.wall, None, random_mode) if sel.wall else []

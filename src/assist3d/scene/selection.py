@@ -33,6 +33,7 @@ import logging
 import threading
 import weakref
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -42,7 +43,7 @@ from ..contracts import AssetRecord
 from ..errors import ConfigError
 from ..rng import make_rng
 from .classes import ClassList, canonical_class, normalise_class, resolve_class_list
-from .roomtypes import ROOM_TEMPLATES, Item
+from .roomtypes import ROOM_TEMPLATES, Item, RoomTemplate
 
 log = logging.getLogger(__name__)
 
@@ -322,13 +323,20 @@ def fits_support_mask(parent: AssetRecord, sizes: np.ndarray) -> np.ndarray:
     return mask
 
 
-def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Generator, *, scene_index: int) -> Selection:
+def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Generator, *, scene_index: int,
+                   propose: Callable[[str, dict[str, tuple[str, ...]]], tuple[RoomTemplate | None, dict]] | None = None,
+                   ) -> Selection:
     """Select the assets of one scene.
 
     Floor draws first (M1 = ``floor_count``), then wall draws (M2 = ``wall_count``), then K =
     ``on_top_count`` on-top draws for each selected object with a support surface, in that order.
     The same ``rng`` state gives the same selection. Raises :class:`ConfigError` when the floor pool
     is empty after the filters while floor objects are requested.
+
+    With ``strategy: room-type``, ``propose(room_type, vocabulary)`` (an LLM's object plan, see
+    :meth:`assist3d.llm.planner.LLMPlanner.propose_room`) may replace the built-in template of the
+    drawn room type; ``vocabulary`` maps "floor", "wall" and "obj" to the pools' canonical class
+    names. Its stats are kept under ``stats["room_llm"]``.
     """
     room_type: str | None = None
     if cfg.strategy == "room-type":
@@ -351,9 +359,19 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
     partners = {g: _CACHE.get(catalog, ("partners", fkey, g),
                               lambda pool=pool, g=g: partner_map(pool.classes, cfg.class_pool_seed, g))
                 if cfg.pairing_prob > 0 and room_type is None else {} for g, pool in pools.items()}
+    template: RoomTemplate | None = None
+    small_key: tuple[str, ...] | None = None
     if room_type is not None:
-        small, obj_pool = ROOM_TEMPLATES[room_type].small, pools["obj"]
-        pools["obj"] = _CACHE.get(catalog, ("room-obj", fkey, room_type), lambda: _Pool(tuple({
+        template = ROOM_TEMPLATES[room_type]
+        stats["room_objects"] = "template"
+        if propose is not None:
+            vocab = {g: tuple(sorted({canonical_class(c) for c in pools[g].classes})) for g in ("floor", "wall", "obj")}
+            proposed, stats["room_llm"] = propose(room_type, vocab)
+            if proposed is not None:
+                template, stats["room_objects"] = proposed, "llm"
+        small, obj_pool = template.small, pools["obj"]
+        small_key = tuple(small)
+        pools["obj"] = _CACHE.get(catalog, ("room-obj", fkey, small_key), lambda: _Pool(tuple({
             r.id: r for name in small for r in obj_pool.item_models(name, cfg.assets_per_class, cfg.class_pool_seed)
         }.values())))
 
@@ -378,7 +396,7 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
 
     drawers = {g: _Drawer(pool, real_of(pool, g, ("pool", fkey, g)), cfg, complementary, partners[g], used, stats)
                for g, pool in pools.items()}
-    obj_sizes = _CACHE.get(catalog, ("sizes", fkey, room_type), lambda: np.array(
+    obj_sizes = _CACHE.get(catalog, ("sizes", fkey, small_key), lambda: np.array(
         [r.size for r in pools["obj"].records], dtype=np.float64).reshape(-1, 3))
     fit_drawers: dict[str, _Drawer | None] = {}
     warned: set[str] = set()
@@ -403,7 +421,7 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
                 mask = fits_support_mask(parent, obj_sizes)
                 return _Pool(tuple(r for r, m in zip(pools["obj"].records, mask) if m))
 
-            sub = _CACHE.get(catalog, ("fit", fkey, room_type, parent.id, parent.supports), build_fit)
+            sub = _CACHE.get(catalog, ("fit", fkey, small_key, parent.id, parent.supports), build_fit)
             real_sub = real_of(sub, "fit", ("fit", fkey, parent.id, parent.supports))
             fit_drawers[parent.id] = (_Drawer(sub, real_sub, cfg, complementary, partners["obj"], used, stats)
                                       if sub else None)
@@ -419,7 +437,7 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
         wall = group_draw("wall", cfg.wall_count)
         floor_holds, wall_holds = [True] * len(floor), [True] * len(wall)
     else:
-        template = ROOM_TEMPLATES[room_type]
+        assert template is not None
         floor, floor_holds = _template_draw(pools["floor"], template.floor, rng, used, stats, cfg)
         wall, wall_holds = _template_draw(pools["wall"], template.wall, rng, used, stats, cfg)
     floor_on_top = tuple(on_top_draw(r, h) for r, h in zip(floor, floor_holds))
