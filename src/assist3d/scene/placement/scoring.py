@@ -16,7 +16,9 @@ frame, whose front is -y and whose own left is +x):
 * ``left_of`` / ``right_of``: the same along local x: the target's own left (+x, as seen by
   someone sitting on it and looking out of its front) or right (-x). For wall objects,
   left/right are along the wall. ``side_of``: the better of the two.
-* ``around``: near x face_to (chairs around a table).
+* ``around``: a ``near`` that prefers contact (1 for gap <= 0.1 m, falling linearly to 0 at
+  1.9 m; satisfied, like ``near``, up to 1 m) x face_to: chairs around a table, pulled up to it
+  where there is room.
 * ``center_aligned``: 1 when the centre is within 5 cm of one of the target's two centre lines,
   falling linearly to 0 at 0.5 m.
 * ``face_to``: 1 when the ray from the candidate's front hits the target's footprint (lateral
@@ -180,7 +182,7 @@ def relation_score(kind: str, c: Candidates, target: TargetBox | None, value: tu
     if kind == "side_of":
         return np.maximum(_directional(c, target, "x", 1.0), _directional(c, target, "x", -1.0))
     if kind == "around":
-        return (1.0 - _lin(_gap(c, target), 0.5, 1.5)) * _face_to(c, target)
+        return (1.0 - _lin(_gap(c, target), 0.1, 1.9)) * _face_to(c, target)
     if kind == "center_aligned":
         lx, ly = _local(c, target)
         return 1.0 - _lin(np.minimum(np.abs(lx), np.abs(ly)), 0.05, 0.5)
