@@ -113,7 +113,7 @@ def test_synthetic_scenes_are_weighted_by_alpha():
         trainer.model.eval()
         torch.manual_seed(0)
         loss, _ = trainer.batch_loss([0], rng=np.random.default_rng(0), augment=False)
-        losses.append(float(loss))
+        losses.append(float(loss.detach()))
     assert losses[1] == pytest.approx(0.25 * losses[0], rel=1e-5)
 
 
