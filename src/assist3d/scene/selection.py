@@ -82,6 +82,15 @@ class Selection:
         return len(self.floor) + len(self.wall) + sum(map(len, self.floor_on_top)) + sum(map(len, self.wall_on_top))
 
 
+def _pick_fresh(members: tuple[AssetRecord, ...], rng: np.random.Generator, used: set[str]) -> AssetRecord:
+    """One of ``members`` uniformly, preferring those not ``used`` yet in this scene; marks it used."""
+    fresh = [r for r in members if r.id not in used]
+    pick = fresh if fresh else members
+    rec = pick[int(rng.integers(len(pick)))]
+    used.add(rec.id)
+    return rec
+
+
 class _Pool:
     """The assets of one group after filtering, indexed by class."""
 
@@ -92,15 +101,17 @@ class _Pool:
             by_class.setdefault(r.class_name, []).append(r)
         self.classes = tuple(sorted(by_class))
         self.by_class = {c: tuple(v) for c, v in by_class.items()}
-        self._by_name: dict[str, tuple[str, ...]] = {}
-        for c in self.classes:
-            for key in {normalise_class(c), canonical_class(c)}:
-                self._by_name[key] = self._by_name.get(key, ()) + (c,)
-
+        self._by_name: dict[str, tuple[str, ...]] | None = None  # built on first use (room-type only)
         self._models: dict[tuple, tuple[AssetRecord, ...]] = {}
 
     def matching(self, name: str) -> tuple[str, ...]:
         """The pool's classes whose name or canonical name is ``name`` (a canonical class name)."""
+        if self._by_name is None:
+            by_name: dict[str, tuple[str, ...]] = {}
+            for c in self.classes:
+                for key in {normalise_class(c), canonical_class(c)}:
+                    by_name[key] = by_name.get(key, ()) + (c,)
+            self._by_name = by_name
         return self._by_name.get(normalise_class(name), ())
 
     def item_models(self, name: str, n: int | None, seed: int) -> tuple[AssetRecord, ...]:
@@ -123,19 +134,10 @@ class _Pool:
         assets not used yet in this scene first."""
         if sampling == "class":
             return self.draw_asset(self.classes[int(rng.integers(len(self.classes)))], rng, used)
-        fresh = [r for r in self.records if r.id not in used]
-        pick = fresh if fresh else self.records
-        rec = pick[int(rng.integers(len(pick)))]
-        used.add(rec.id)
-        return rec
+        return _pick_fresh(self.records, rng, used)
 
     def draw_asset(self, cls: str, rng: np.random.Generator, used: set[str]) -> AssetRecord:
-        members = self.by_class[cls]
-        fresh = [r for r in members if r.id not in used]
-        pick = fresh if fresh else members
-        rec = pick[int(rng.integers(len(pick)))]
-        used.add(rec.id)
-        return rec
+        return _pick_fresh(self.by_class[cls], rng, used)
 
 
 class _PoolCache:
@@ -293,15 +295,10 @@ def _template_draw(pool: _Pool, items: tuple[Item, ...], rng: np.random.Generato
         if not models:
             stats["template_misses"] += 1
             continue
-
-        def take() -> AssetRecord:
-            fresh = [r for r in models if r.id not in used]
-            pick = fresh if fresh else models
-            rec = pick[int(rng.integers(len(pick)))]
-            used.add(rec.id)
-            return rec
-
-        out += [take()] * n if it.same else [take() for _ in range(n)]
+        if it.same:
+            out += [_pick_fresh(models, rng, used)] * n
+        else:
+            out += [_pick_fresh(models, rng, used) for _ in range(n)]
         holds += [it.holds] * n
         chosen[it.cls] = chosen.get(it.cls, 0) + n
     return out, holds
