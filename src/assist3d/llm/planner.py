@@ -31,6 +31,7 @@ from ..config import LLMConfig
 from ..contracts import Relation, Room
 from ..errors import ConfigError, LLMError
 from ..scene.relations import CROSS_GROUP, GroupPlan, PlannedObject, Planner, PlanRequest, validate_plan
+from ..scene.roomtypes import RoomTemplate
 from .cache import ResponseCache
 from .client import ChatAnswer, ChatClient, Usage
 from .prompts import render_plan_messages, render_repair_message
@@ -112,14 +113,15 @@ class LLMPlanner:
             return self._with_stats(fb, usage, repairs, (reason, *fb.notes), t0)
         return self._with_stats(plan, usage, repairs, plan.notes, t0)
 
-    def propose_room(self, room_type: str, room: Room, vocab: dict[str, tuple[str, ...]]) -> tuple[Any, dict]:
+    def propose_room(self, room_type: str, room: Room,
+                     vocab: dict[str, tuple[str, ...]]) -> tuple[RoomTemplate | None, dict]:
         """The objects of a ``room_type`` as the model chooses them (Holodeck's object plan):
         ``(RoomTemplate or None, stats)``; None (the built-in template is then used) when the call
         fails or the answer has no usable floor object, with the reason in ``stats["notes"]``."""
         usage = Usage()
         t0 = time.monotonic()
         notes: list[str] = []
-        template = None
+        template: RoomTemplate | None = None
         try:
             answer = self.client.complete(room_messages(room_type, room, vocab, self.cfg.prompt_dir), usage=usage)
             data, err = parse_json_text(answer.content)
