@@ -185,12 +185,22 @@ def test_assets_per_class_keeps_a_fixed_few_models_per_class(tmp_path):
     cat = build_library(tmp_path / "lib", count=400, seed=0)
     cfg = SelectionConfig(floor_count=60, wall_count=20, on_top_count=2, assets_per_class=1,
                           complementary_fraction=0.0)
-    seen: dict[str, set[str]] = {}
+    seen: dict[tuple[str, str], set[str]] = {}
     for k in range(4):
         sel = select_objects(cat, cfg, np.random.default_rng(k), scene_index=k)
-        for r in list(sel.floor) + list(sel.wall) + [o for g in sel.floor_on_top + sel.wall_on_top for o in g]:
-            seen.setdefault(r.class_name, set()).add(r.id)
-    assert seen and all(len(ids) == 1 for ids in seen.values())
+        drawn = [("floor", r) for r in sel.floor] + [("wall", r) for r in sel.wall] + \
+            [("obj", o) for g in sel.floor_on_top + sel.wall_on_top for o in g]
+        for group, r in drawn:
+            seen.setdefault((r.class_name, group), set()).add(r.id)
+    assert seen and all(len(ids) == 1 for ids in seen.values())  # one model per class and group
+    # chosen within each group: a class spanning groups keeps a model in every group it has
+    # (choosing across groups left some groups without the class: no floor plant, no floor cabinet)
+    from assist3d.scene.selection import _filter
+
+    for g in ("floor", "wall", "obj"):
+        full = {r.class_name for r in cat.group(g)}
+        kept = _filter(cat.group(g), cfg, cat)
+        assert {r.class_name for r in kept} == full and len(kept) == len(full)
     free = SelectionConfig(floor_count=60, wall_count=20, on_top_count=2, complementary_fraction=0.0)
     sel = select_objects(cat, free, np.random.default_rng(0), scene_index=0)
     per_class: dict[str, set[str]] = {}
@@ -288,14 +298,32 @@ def test_room_type_missing_class_is_skipped_and_counted(tmp_path):
 
 def test_room_type_with_retrieval_reuses_few_models(tmp_path):
     cat = _room_catalog(tmp_path, per_class=6)
-    used: dict[str, set[str]] = {}
+    used: dict[tuple[str, str], set[str]] = {}
     for seed in range(30):
         s = _room(cat, seed=seed, assets_per_class=1)
-        for r in list(s.floor) + list(s.wall) + [r for t in s.floor_on_top + s.wall_on_top for r in t]:
-            used.setdefault(r.class_name, set()).add(r.id)
+        drawn = [("floor", r) for r in s.floor] + [("wall", r) for r in s.wall] + \
+            [("obj", r) for t in s.floor_on_top + s.wall_on_top for r in t]
+        for group, r in drawn:
+            used.setdefault((r.class_name, group), set()).add(r.id)
     assert used and all(len(ids) == 1 for ids in used.values()), {c: ids for c, ids in used.items() if len(ids) > 1}
 
 
 def test_unknown_room_type_is_a_config_error():
     with pytest.raises(ValueError, match="unknown room type"):
         SelectionConfig(room_types=["garage"])
+
+
+def test_room_item_falls_back_to_qualified_class_names(tmp_path):
+    """A catalog without a plain "mug" class but with "coffee mug" still serves the item "mug"
+    (as a text retrieval would); an exact class wins when there is one, and a different kind
+    sharing the last word ("wine bottle" for "soap bottle") never matches."""
+    from assist3d.scene.selection import _Pool
+
+    def rec(cls, i=0):
+        return AssetRecord(id=f"q:{cls}/{i}", source="test", name=cls, class_name=cls, groups=("obj",),
+                           size=(0.1, 0.1, 0.1))
+
+    pool = _Pool((rec("coffee mug"), rec("wall flat tv"), rec("wine bottle"), rec("tv"), rec("smug")))
+    assert [r.class_name for r in pool.item_models("mug", None, 0)] == ["coffee mug"]
+    assert [r.class_name for r in pool.item_models("tv", None, 0)] == ["tv"]  # exact match first
+    assert pool.item_models("soap bottle", None, 0) == ()

@@ -114,12 +114,20 @@ class _Pool:
             self._by_name = by_name
         return self._by_name.get(normalise_class(name), ())
 
+    def qualified(self, name: str) -> tuple[str, ...]:
+        """The pool's classes that name a kind of ``name``: their name ends with it as whole words
+        ("coffee mug" for "mug", "wall flat tv" for "tv"; not "wine bottle" for "soap bottle")."""
+        want = normalise_class(name)
+        return tuple(c for c in self.classes if normalise_class(c).endswith(" " + want))
+
     def item_models(self, name: str, n: int | None, seed: int) -> tuple[AssetRecord, ...]:
         """What a text retrieval for ``name`` returns, the same in every scene: the assets of every
-        matching class (sorted by id), or a seeded, fixed ``n`` of them."""
+        matching class, or of the classes naming a kind of it when none matches (sorted by id), or
+        a seeded, fixed ``n`` of them."""
         key = (name, n, seed)
         if key not in self._models:
-            recs = sorted((r for c in self.matching(name) for r in self.by_class[c]), key=lambda r: r.id)
+            classes = self.matching(name) or self.qualified(name)
+            recs = sorted((r for c in classes for r in self.by_class[c]), key=lambda r: r.id)
             if n is not None and len(recs) > n:
                 keep = make_rng(seed, "retrieval", normalise_class(name)).permutation(len(recs))[:n]
                 recs = [recs[int(i)] for i in sorted(keep)]
@@ -204,10 +212,12 @@ def _filter(records: tuple[AssetRecord, ...], cfg: SelectionConfig, catalog: Cat
         wanted = set(cfg.clusters)
         out = tuple(r for r in out if r.cluster in wanted)
     if cfg.assets_per_class is not None:
-        # keep a seeded, fixed choice of n models per class (the same in every scene and group), as
-        # a retrieval-based generator that always returns the best match for "a chair" does
+        # keep a seeded, fixed choice of n models per class of this group (the same in every
+        # scene), as a retrieval-based generator that always returns the best match for "a chair"
+        # does; chosen within the group, so that a class spanning groups (a plant on the floor or
+        # on a table) keeps models in each
         by_class: dict[str, list[AssetRecord]] = {}
-        for r in sorted(catalog.records, key=lambda r: r.id):
+        for r in sorted(out, key=lambda r: r.id):
             by_class.setdefault(r.class_name, []).append(r)
         keep_ids: set[str] = set()
         for cls in sorted(by_class):
