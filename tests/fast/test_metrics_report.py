@@ -96,3 +96,12 @@ def test_metrics_cli_json_keys_are_the_datasets_as_given(tmp_path, monkeypatch):
         assert {"geometry_diversity", "context_complexity", "layout_score", "scenes", "instances"} <= set(row)
         assert row["scenes"] == 1 and row["instances"] == 2
     assert table["ds"]["geometry_diversity"] == table["assist3d:ds"]["geometry_diversity"]
+
+
+def test_plot_labels_are_short_when_unambiguous():
+    from assist3d.metrics.report import short_labels
+
+    assert short_labels(["/tmp/cmp/assist3d", "assist3d:/tmp/cmp/randomrooms"]) == ["assist3d", "randomrooms"]
+    # two folders of the same name in different comparisons keep their full names
+    assert short_labels(["/a/assist3d", "/b/assist3d"]) == ["/a/assist3d", "/b/assist3d"]
+    assert short_labels(["array:/data/scene0451_01.npy"]) == ["scene0451_01.npy"]

@@ -202,6 +202,13 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook) -> di
     return out
 
 
+def short_labels(names: Sequence[str]) -> list[str]:
+    """Legend labels: each dataset's last path component when those are unique (the folders of one
+    comparison), else the names as given."""
+    tails = [Path(n.split(":", 1)[-1]).name or n for n in names]
+    return tails if len(set(tails)) == len(tails) else list(names)
+
+
 def plot_summaries(summaries: Sequence[DatasetSummary], codebook: Codebook, path: str | Path) -> None:
     """A PNG: shape-code histograms, per-class max co-occurrence, per-scene layout scores."""
     import matplotlib
@@ -213,15 +220,15 @@ def plot_summaries(summaries: Sequence[DatasetSummary], codebook: Codebook, path
 
     fig, axes = plt.subplots(1, 3, figsize=(16, 4.6))
     k = len(codebook.centers)
-    for s in summaries:
+    for s, label in zip(summaries, short_labels([s.name for s in summaries])):
         if len(s.features):
             p = np.bincount(codebook.assign(s.features), minlength=k) / len(s.features)
-            axes[0].plot(np.sort(p)[::-1], label=s.name, lw=1.6)
+            axes[0].plot(np.sort(p)[::-1], label=label, lw=1.6)
         if s.scene_classes:
             vals = sorted(v for _, v in per_class_max_cooccurrence(s.scene_classes).values())
-            axes[1].plot(np.linspace(0, 1, len(vals)), vals, label=s.name, lw=1.6)
+            axes[1].plot(np.linspace(0, 1, len(vals)), vals, label=label, lw=1.6)
         if s.layout_scores:
-            axes[2].hist(s.layout_scores, bins=20, range=(0, 100), alpha=0.5, label=s.name)
+            axes[2].hist(s.layout_scores, bins=20, range=(0, 100), alpha=0.5, label=label)
     axes[0].set(title="Geometry: shape-code shares (sorted)", xlabel="code rank", ylabel="share of instances")
     axes[1].set(title="Context: max co-occurrence per class", xlabel="class quantile", ylabel="max P(other | class)")
     axes[2].set(title="Layout: plausibility per scene", xlabel="score (0-100)", ylabel="scenes")
