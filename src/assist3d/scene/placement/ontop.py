@@ -119,7 +119,7 @@ class OnTopProblem(MovingBoxesMixin):
         w, d, h = item.record.size
         c = self._raw(k)
         if len(c) == 0:
-            return f"its {w:.2f} x {d:.2f} x {h:.2f} m box fits on no surface of the support"
+            return f"its {w:.2f} x {d:.2f} x {h:.2f} m box fits on no surface of the support ({self.support.asset})"
         free = c.take(np.flatnonzero(~self._collide(k, c, include_moving=False)))
         if len(free) == 0:
             return "every position on the support is blocked by other objects"
