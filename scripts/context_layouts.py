@@ -32,11 +32,10 @@ import numpy as np
 from assist3d.assets import open_catalog
 from assist3d.metrics.context import context_complexity
 from assist3d.presets import apply_preset
-from assist3d.rng import make_rng, scene_seed
+from assist3d.rng import scene_seed
 from assist3d.scene.layout import build_layout
 
 SPARSE = {"selection": {"floor_count": 12, "wall_count": 4, "on_top_count": 2}}
-POOL_PER_PRESET = 2000
 
 _catalog = None
 
@@ -53,15 +52,14 @@ def _layout(job: tuple[str | None, str, dict, int]) -> tuple[str, list[tuple[str
 
 def _geometry(assets: str | None, presets: list[str], scenes: dict[str, list[list[tuple[str, str]]]]) -> dict:
     from assist3d.metrics.clusters import asset_features
-    from assist3d.metrics.diversity import fit_codebook, geometry_diversity
+    from assist3d.metrics.diversity import geometry_diversity
+    from assist3d.metrics.report import DatasetSummary, shared_codebook
 
     ids, feats = asset_features(open_catalog(assets))
     row = {a: i for i, a in enumerate(ids)}
     per = {p: feats[[row[a] for sc in scenes[p] for a, _ in sc if a in row]] for p in presets}
-    rng = make_rng(0, "codebook")
-    n = min(POOL_PER_PRESET, *(len(f) for f in per.values()))
-    pool = np.concatenate([f[rng.choice(len(f), n, replace=False)] for f in per.values()])
-    book = fit_codebook(pool, k=64, rng=rng)
+    # the codebook `assist3d metrics` would fit: an equal pool from every preset
+    book = shared_codebook([DatasetSummary(p, features=f) for p, f in per.items()], seed=0)
     return {p: {"distinct_assets": len({a for sc in scenes[p] for a, _ in sc}),
                 "geometry_diversity_mesh": round(geometry_diversity(per[p], book), 4)} for p in presets}
 

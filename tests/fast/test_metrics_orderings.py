@@ -15,10 +15,11 @@ from assist3d.assets.procedural import build_library
 from assist3d.assets.sh3d import import_sh3d
 from assist3d.metrics.clusters import asset_features
 from assist3d.metrics.context import context_complexity
-from assist3d.metrics.diversity import fit_codebook, geometry_diversity
+from assist3d.metrics.diversity import geometry_diversity
 from assist3d.metrics.plausibility import score_layout
+from assist3d.metrics.report import DatasetSummary, shared_codebook
 from assist3d.presets import apply_preset
-from assist3d.rng import make_rng, scene_seed
+from assist3d.rng import scene_seed
 from assist3d.scene.layout import build_layout
 
 PRESETS = ("assist3d", "randomrooms", "holodeck-style", "no-context")
@@ -41,10 +42,7 @@ def test_generator_orderings_on_a_large_catalog(tmp_path, sh3d_dir):
         cc[p] = context_complexity([{x.class_name for x in lay.instances} for lay in layouts])
         per[p] = feats[[row[x.asset] for lay in layouts for x in lay.instances]]
         ls[p] = float(np.mean([score_layout(lay, cat).score for lay in layouts]))
-    rng = make_rng(0, "codebook")
-    n = min(2000, *(len(f) for f in per.values()))
-    book = fit_codebook(np.concatenate([f[rng.choice(len(f), n, replace=False)] for f in per.values()]), k=64,
-                        rng=rng)
+    book = shared_codebook([DatasetSummary(p, features=f) for p, f in per.items()], seed=0)
     gd = {p: geometry_diversity(f, book) for p, f in per.items()}
     # geometry diversity: ASSIST-3D and RandomRooms above Holodeck-style
     assert min(gd["assist3d"], gd["randomrooms"]) > gd["holodeck-style"], gd

@@ -131,11 +131,15 @@ class _Run:
         except AssistError as e:
             self.notes.append(f"{request.group}: planner {self.planner.name} failed ({e}); rule-based plan used")
             plan = RulePlanner().plan(request, rng=rng)
+        self.add_plan_stats(plan.stats)
+        return plan
+
+    def add_plan_stats(self, stats: dict) -> None:
+        """Sum a planner call's counters (LLM calls, cache hits, tokens, seconds) into the layout's."""
         for k in SUMMED_PLAN_STATS:
-            v = plan.stats.get(k)
+            v = stats.get(k)
             if isinstance(v, (int, float)):
                 self.plan_stats[k] += v
-        return plan
 
     def run_group(self, group: str, objects: tuple[AssetRecord, ...], support: PlacedInstance | None,
                   random_mode: bool) -> list[int | None]:
@@ -219,8 +223,7 @@ def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_inde
     run = _Run(catalog, cfg, seed, planner, room)
     room_llm = sel.stats.get("room_llm")
     if room_llm:  # the LLM's object plan counts with the planning calls
-        for k in ("llm_calls", "cache_hits", "prompt_tokens", "completion_tokens", "llm_seconds"):
-            run.plan_stats[k] += room_llm.get(k, 0)
+        run.add_plan_stats(room_llm)
         run.notes.extend(str(n) for n in room_llm.get("notes", ()))
     random_mode = cfg.layout.planner == "none"
     floor_ids = run.run_group("floor", sel.floor, None, random_mode) if sel.floor else []
