@@ -50,8 +50,9 @@ def _register_all() -> None:
     from . import evaluate as _evaluate
     from . import metrics as _metrics
     from . import train as _train
+    from . import segment as _segment
 
-    for mod in (_assets, _scene, _generate, _evaluate, _metrics, _train):
+    for mod in (_assets, _scene, _generate, _evaluate, _metrics, _train, _segment):
         mod.register(app)
 
 

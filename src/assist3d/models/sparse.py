@@ -307,6 +307,30 @@ class SparseBatchNorm(nn.BatchNorm1d):
         return x.replace(super().forward(x.feats))
 
 
+class SparseSceneNorm(nn.Module):
+    """Normalisation by each scene's own statistics (batch index = ``coords[:, 0]``), with an affine map.
+
+    Unlike BatchNorm it keeps no running statistics, so training and inference compute the same
+    function: a model trained on generated scans is not tied to their feature statistics.
+    """
+
+    def __init__(self, channels: int, eps: float = 1e-5):
+        super().__init__()
+        self.eps = eps
+        self.weight = nn.Parameter(torch.ones(channels))
+        self.bias = nn.Parameter(torch.zeros(channels))
+
+    def forward(self, x: SparseTensor) -> SparseTensor:
+        f = x.feats
+        b = x.coords[:, 0].to(torch.int64)
+        nb = int(b.max()) + 1 if len(b) else 1
+        counts = torch.bincount(b, minlength=nb).clamp(min=1).to(f.dtype)[:, None]
+        mean = f.new_zeros((nb, f.shape[1])).index_add(0, b, f) / counts
+        centred = f - mean[b]
+        var = f.new_zeros((nb, f.shape[1])).index_add(0, b, centred * centred) / counts
+        return x.replace(centred * torch.rsqrt(var[b] + self.eps) * self.weight + self.bias)
+
+
 class SparseReLU(nn.Module):
     def forward(self, x: SparseTensor) -> SparseTensor:
         return x.replace(torch.relu(x.feats))

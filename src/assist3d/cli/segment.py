@@ -1,0 +1,270 @@
+"""CLI: ``assist3d probe`` (data-quality benchmark on real scans) and ``assist3d segment`` (instances of
+any scan with the shipped model, a trained checkpoint or the geometric reference)."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import logging
+import time
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+import typer
+
+from ..errors import ConfigError, DataError
+
+log = logging.getLogger("assist3d.segment")
+
+
+def _require_torch() -> None:
+    if importlib.util.find_spec("torch") is None:
+        raise ConfigError("this command needs PyTorch: install the [train] extra (pip install 'assist3d[train]')")
+
+
+def register(app: typer.Typer) -> None:
+    app.command("probe")(probe_cmd)
+    app.command("segment")(segment_cmd)
+
+
+def _fmt(x: float | None) -> str:
+    return "-" if x is None else f"{x:.3f}"
+
+
+def probe_cmd(
+    train: list[str] = typer.Option(..., "--train", help="training set FORMAT:PATH (repeatable; all are pooled)"),
+    eval_: list[str] = typer.Option(..., "--eval", help="real scans FORMAT:PATH to segment zero-shot (repeatable)"),
+    minutes: Optional[float] = typer.Option(None, "--minutes", help="training budget per seed in minutes"),
+    steps: Optional[int] = typer.Option(None, "--steps", help="training budget per seed in steps (deterministic)"),
+    seeds: int = typer.Option(1, "--seeds", min=1, max=100, help="repeat with seeds 0..K-1; report mean and std"),
+    out: Path = typer.Option(Path("probe_out"), "--out", "-o", help="resumable output folder"),
+    config: Optional[Path] = typer.Option(None, "--config", "-c", help="segmenter config YAML (net, augment, cluster, optim)"),
+    max_train_scenes: int = typer.Option(0, "--max-train-scenes", min=0, help="use the first N scenes of each training set (0 = all)"),
+    as_json: bool = typer.Option(False, "--json", help="print the summary as JSON (runs, mean, std)"),
+    threads: int = typer.Option(0, "--threads", min=0, max=256, help="torch CPU threads (0 = all cores)"),
+) -> None:
+    """Train the CPU segmenter on TRAIN for a fixed budget, segment EVAL zero-shot, print AP/AP50/AP25/AR."""
+    _require_torch()
+    import torch
+    import yaml
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.table import Table
+
+    from ..segmenter.config import parse_segmenter_config
+    from ..segmenter.probe import ProbeRequest, run_probe
+    from ..segmenter.train import Budget
+
+    if minutes is None and steps is None:
+        minutes = 50.0
+    cfg_data: dict = {}
+    if config is not None:
+        if not config.is_file():
+            raise ConfigError(f"--config {config}: file not found")
+        try:
+            cfg_data = yaml.safe_load(config.read_text()) or {}
+        except yaml.YAMLError as e:
+            raise ConfigError(f"--config {config}: not valid YAML ({e})") from None
+        if not isinstance(cfg_data, dict):
+            raise ConfigError(f"--config {config}: expected a mapping at the top level")
+    req = ProbeRequest(train=tuple(train), eval=tuple(eval_), budget=Budget(steps=steps, minutes=minutes),
+                       seeds=seeds, config=parse_segmenter_config(cfg_data, str(config or "defaults")),
+                       max_train_scenes=max_train_scenes)
+    if threads:
+        torch.set_num_threads(threads)
+    console = Console(stderr=True)
+    total = steps if steps is not None else None
+    with Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.fields[info]}"),
+                  TimeElapsedColumn(), console=console, disable=as_json and not console.is_terminal) as bar:
+        task = bar.add_task("probe", total=None, info="")
+
+        def on_event(kind: str, info: dict) -> None:
+            if kind == "load":
+                bar.update(task, description="load", total=info["total"], completed=info["done"], info="training scenes")
+            elif kind == "train_start":
+                bar.update(task, description=f"train seed {info['seed']}", completed=0,
+                           total=total if total else 100.0, info="")
+            elif kind == "step":
+                done = info["step"] if total else min(100.0, 100.0 * info["progress"])
+                bar.update(task, completed=done, info=f"step {info['step']} loss {info['loss']:.3f} "
+                                                      f"({info['train_seconds'] / 60:.1f} min)")
+            elif kind == "eval":
+                bar.update(task, description=f"eval seed {info['seed']}", total=info["total"], completed=info["done"], info="")
+            elif kind == "seed_done":
+                console.print(f"seed {info['seed']}: AP {_fmt(info['AP'])}  AP50 {_fmt(info['AP50'])}  "
+                              f"AP25 {_fmt(info['AP25'])}  AR {_fmt(info['AR'])}  ({info['steps']} steps, "
+                              f"{info['train_seconds'] / 60:.1f} min{', cached' if info.get('cached') else ''})")
+
+        summary = run_probe(req, out, on_event=on_event)
+    if as_json:
+        typer.echo(json.dumps({k: summary[k] for k in ("runs", "mean", "std")}, indent=1))
+        return
+    table = Table(title=f"probe: {', '.join(train)} -> {', '.join(eval_)}")
+    for col in ("seed", "AP", "AP50 [95% CI]", "AP25", "AR", "steps", "minutes"):
+        table.add_column(col, justify="right")
+    for r in summary["runs"]:
+        ci = r.get("ci95", {}).get("AP50")
+        ci_s = f" [{ci[0]:.3f}, {ci[1]:.3f}]" if ci else ""
+        table.add_row(str(r["seed"]), _fmt(r["AP"]), _fmt(r["AP50"]) + ci_s, _fmt(r["AP25"]), _fmt(r["AR"]),
+                      str(r["steps"]), f"{r['train_seconds'] / 60:.1f}")
+    m, s = summary["mean"], summary["std"]
+    table.add_row("mean ± std", *(f"{_fmt(m[k])} ± {_fmt(s[k])}" for k in ("AP", "AP50", "AP25", "AR")),
+                  f"{m['steps']:.0f}" if m["steps"] is not None else "-", "")
+    Console().print(table)
+
+
+# ----------------------------------------------------------------------------------------------- segment
+
+def _scan_from_file(path: Path) -> tuple[str, np.ndarray, np.ndarray | None, object | None]:
+    """(scene_id, coord (N, 3), color (N, 3) uint8 or None, PointSample with GT or None) from .ply / .npy."""
+    from ..data.ply import read_ply
+
+    if not path.is_file():
+        raise DataError(f"{path}: input not found" + (" (it is a folder: give FORMAT:PATH)" if path.is_dir() else ""))
+    suffix = path.suffix.lower()
+    if suffix == ".ply":
+        mesh = read_ply(path)
+        coord = mesh.xyz()
+        color = mesh.rgb()
+        return path.stem, coord, color, None
+    if suffix == ".npy":
+        try:
+            a = np.load(path, allow_pickle=False)
+        except (ValueError, OSError, EOFError) as e:
+            raise DataError(f"{path}: not a readable .npy array ({type(e).__name__}: {str(e)[:120]})") from None
+        if a.ndim != 2 or a.shape[1] not in (3, 6, 8) or not np.issubdtype(a.dtype, np.number):
+            raise DataError(f"{path}: expected a numeric (N, 3), (N, 6) or (N, 8) array (xyz[, rgb[, semantic, instance]]), "
+                            f"got {a.dtype} {a.shape}")
+        if a.shape[1] == 8:
+            from ..data.array import ArrayDataset
+
+            s = ArrayDataset(path).load(path.stem)
+            return path.stem, s.coord, s.color, s
+        color = np.clip(np.rint(a[:, 3:6]), 0, 255).astype(np.uint8) if a.shape[1] >= 6 else None
+        return path.stem, np.asarray(a[:, :3], np.float32), color, None
+    raise DataError(f"{path}: unsupported input {suffix or '(no suffix)'}; give a .ply, an (N, 3|6|8) .npy or FORMAT:PATH")
+
+
+def _inputs(spec: str):
+    """Yield (scene_id, coord, color, sample-with-GT-or-None) for a file or a reader spec."""
+    p = Path(spec)
+    if p.suffix.lower() in (".ply", ".npy") or p.exists():
+        yield _scan_from_file(p)
+        return
+    from ..data import open_dataset
+
+    ds = open_dataset(spec)
+    for sid in ds.scene_ids:
+        s = ds.load(sid)
+        yield sid, s.coord, s.color, s
+
+
+def instance_colors(labels: np.ndarray) -> np.ndarray:
+    """A distinct colour per instance, grey for points in none."""
+    rng = np.random.default_rng(7)
+    k = int(labels.max()) + 1 if len(labels) and labels.max() >= 0 else 0
+    pal = (rng.uniform(0.15, 1.0, (max(k, 1), 3)) * 255).astype(np.uint8)
+    out = np.full((len(labels), 3), 150, np.uint8)
+    sel = labels >= 0
+    out[sel] = pal[labels[sel]]
+    return out
+
+
+def _png(path: Path, coord: np.ndarray, colors: np.ndarray, title: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..fileio import write_bytes_atomic
+    import io
+
+    order = np.argsort(coord[:, 2])
+    fig, ax = plt.subplots(figsize=(7, 7), dpi=110)
+    ax.scatter(coord[order, 0], coord[order, 1], c=colors[order] / 255.0, s=1.0, linewidths=0)
+    ax.set_aspect("equal")
+    ax.set_title(title)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", bbox_inches="tight")
+    plt.close(fig)
+    write_bytes_atomic(path, buf.getvalue())
+
+
+def segment_cmd(
+    input_: str = typer.Argument(..., metavar="INPUT", help="a .ply (mesh or point cloud), an (N, 3|6|8) .npy, or FORMAT:PATH"),
+    out: Path = typer.Option(..., "--out", "-o", help="output folder: <scene_id>.npz (masks, scores) and <scene_id>.ply"),
+    checkpoint: Optional[Path] = typer.Option(None, "--checkpoint", help="a trained segmenter (default: the shipped model)"),
+    method: str = typer.Option("learned", "--method", help="learned (a model) or geometric (planes removed, connected components)"),
+    png: bool = typer.Option(False, "--png", help="also write <scene_id>.png, a top view coloured by instance"),
+    as_json: bool = typer.Option(False, "--json", help="print one JSON line per scene (instances, seconds, AP when GT is known)"),
+    threads: int = typer.Option(0, "--threads", min=0, max=256, help="torch CPU threads (0 = all cores)"),
+) -> None:
+    """Segment object instances in a scan (class-agnostic), with no GPU and no download."""
+    from ..evaluation.ap import match_scene, summarize
+    from ..evaluation.predictions import save_predictions
+    from ..data.ply import write_ply
+
+    if method not in ("learned", "geometric"):
+        raise ConfigError(f"--method {method!r}: expected 'learned' or 'geometric'")
+    if method == "geometric" and checkpoint is not None:
+        raise ConfigError("--checkpoint is for --method learned; the geometric reference has no weights")
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out {out}: exists and is not a folder")
+    loaded = None
+    if method == "learned":
+        _require_torch()
+        import torch
+
+        from ..segmenter.checkpoint import load_segmenter
+        from ..segmenter.shipped import shipped_model_path
+
+        if threads:
+            torch.set_num_threads(threads)
+        loaded = load_segmenter(checkpoint or shipped_model_path())
+    n_done = 0
+    for scene_id, coord, color, sample in _inputs(input_):
+        t0 = time.perf_counter()
+        coord = np.asarray(coord, np.float32)
+        if len(coord) == 0:
+            raise DataError(f"{input_}: scene {scene_id} has no points")
+        finite = np.all(np.isfinite(coord), axis=1)
+        if not finite.all():
+            log.warning("%s: %d of %d points have non-finite coordinates; they get no instance",
+                        scene_id, int((~finite).sum()), len(coord))
+            if not finite.any():
+                raise DataError(f"{input_}: scene {scene_id}: no point has finite coordinates")
+        sub_color = color[finite] if color is not None else None
+        if loaded is not None:
+            from ..segmenter.infer import segment_points
+
+            seg = segment_points(loaded.model, loaded.config, coord[finite], sub_color)
+        else:
+            from ..segmenter.geometric import segment_geometric
+
+            seg = segment_geometric(coord[finite])
+        masks = np.zeros((len(seg.scores), len(coord)), bool)
+        masks[:, finite] = seg.masks
+        labels = np.full(len(coord), -1, np.int64)
+        labels[finite] = seg.labels
+        seconds = time.perf_counter() - t0
+        out.mkdir(parents=True, exist_ok=True)
+        save_predictions(out / f"{scene_id}.npz", masks, seg.scores)
+        colors = instance_colors(labels)
+        safe_coord = np.where(np.isfinite(coord), coord, 0).astype(np.float32)
+        write_ply(out / f"{scene_id}.ply", safe_coord, colors)
+        if png:
+            _png(out / f"{scene_id}.png", safe_coord[finite], colors[finite], f"{scene_id}: {len(seg.scores)} instances")
+        row: dict = {"scene": scene_id, "points": len(coord), "instances": int(len(seg.scores)),
+                     "seconds": round(seconds, 2), "npz": str(out / f"{scene_id}.npz")}
+        if sample is not None and (sample.instance >= 0).any():
+            m = summarize([match_scene(sample.instance, masks, seg.scores, valid=sample.valid, scene_id=scene_id)])
+            row.update({k: round(m[k], 4) for k in ("AP", "AP50", "AP25", "AR")})
+        n_done += 1
+        if as_json:
+            typer.echo(json.dumps(row))
+        else:
+            extra = "".join(f"  {k} {row[k]:.3f}" for k in ("AP", "AP50", "AP25") if k in row)
+            typer.echo(f"{scene_id}: {row['instances']} instances in {row['seconds']:.1f} s{extra} -> {out}/{scene_id}.npz, .ply")

@@ -1,0 +1,301 @@
+"""The CPU segmenter: per-scene normalisation, clustering, training (loss falls, exact resume),
+safe checkpoints, the probe's JSON contract and resumption, the geometric reference, `segment`."""
+
+from __future__ import annotations
+
+import json
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from typer.testing import CliRunner  # noqa: E402
+
+from assist3d.cli import app  # noqa: E402
+from assist3d.config import parse_config  # noqa: E402
+from assist3d.data import open_dataset  # noqa: E402
+from assist3d.engine.toy import make_toy_scene  # noqa: E402
+from assist3d.errors import DataError  # noqa: E402
+from assist3d.evaluation.ap import match_scene, summarize  # noqa: E402
+from assist3d.models.sparse import SparseSceneNorm, sparse_tensor  # noqa: E402
+from assist3d.pipeline import generate_dataset  # noqa: E402
+from assist3d.segmenter import train as train_mod  # noqa: E402
+from assist3d.segmenter.checkpoint import load_segmenter, save_segmenter  # noqa: E402
+from assist3d.segmenter.cluster import cluster_voxels  # noqa: E402
+from assist3d.segmenter.config import ClusterConfig, parse_segmenter_config  # noqa: E402
+from assist3d.segmenter.data import Scene, make_example  # noqa: E402
+from assist3d.segmenter.geometric import segment_geometric  # noqa: E402
+from assist3d.segmenter.infer import segment_points  # noqa: E402
+from assist3d.segmenter.model import Segmenter  # noqa: E402
+from assist3d.segmenter.train import Budget, example_loss, train_segmenter  # noqa: E402
+
+TINY_GEN = {
+    "seed": 5,
+    "assets": {"procedural_count": 60},
+    "selection": {"floor_count": 6, "wall_count": 2, "on_top_count": 1},
+    "room": {"area_min": 10.0, "area_max": 16.0},
+    "layout": {"group_budget_s": 120.0},
+    "render": {"width": 80, "height": 60, "fx": 72.2, "fy": 72.2, "vantage_points": 2, "views_per_point": 6},
+}
+TINY_NET = {"net": {"voxel_size": 0.1, "stem_channels": 8, "enc_channels": [8, 16, 16, 24],
+                    "dec_channels": [24, 16, 16, 16]},
+            "augment": {"crop_m": 0.0}, "optim": {"batch_size": 2, "lr": 0.01}}
+runner = CliRunner()
+
+
+@pytest.fixture(scope="module")
+def tiny_data(tmp_path_factory):
+    out = tmp_path_factory.mktemp("seg-data")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("ASSIST3D_CACHE", str(tmp_path_factory.getbasetemp() / "assist3d-cache"))
+        mp.delenv("ASSIST3D_ASSETS", raising=False)
+        generate_dataset(parse_config(TINY_GEN), out, range(2))
+    return out
+
+
+@pytest.fixture(scope="module")
+def tiny_scenes(tiny_data):
+    return [Scene.from_sample(s) for s in open_dataset(f"assist3d:{tiny_data}")]
+
+
+def test_scene_norm_of_a_scene_does_not_depend_on_its_batch():
+    gen = torch.Generator().manual_seed(0)
+    a = torch.randint(0, 20, (50, 3), generator=gen)
+    b = torch.randint(0, 20, (70, 3), generator=gen)
+    fa, fb = torch.randn(50, 4, generator=gen), torch.randn(70, 4, generator=gen) * 5 + 3
+    norm = SparseSceneNorm(4)
+    alone = norm(sparse_tensor(torch.cat([torch.zeros(50, 1, dtype=torch.int64), a], 1), fa)).feats
+    both_c = torch.cat([torch.cat([torch.zeros(50, 1, dtype=torch.int64), a], 1),
+                        torch.cat([torch.ones(70, 1, dtype=torch.int64), b], 1)])
+    both = norm(sparse_tensor(both_c, torch.cat([fa, fb]))).feats
+    assert torch.allclose(alone, both[:50], atol=1e-5)
+    assert torch.allclose(both[50:].mean(0), torch.zeros(4), atol=1e-5)
+
+
+def test_offsets_separate_touching_objects_and_fragments_rank_low():
+    # two touching 10-voxel bars; offsets point each voxel at its own bar's centre
+    centres = np.array([[0.05 * i, 0.0, 0.0] for i in range(20)])
+    offset = np.zeros_like(centres)
+    offset[:10, 0] = 0.05 * 4.5 - centres[:10, 0]
+    offset[10:, 0] = 0.05 * 14.5 - centres[10:, 0]
+    fg = np.full(20, 0.9)
+    cfg = ClusterConfig(radius=0.07, min_voxels=3)
+    inst = cluster_voxels(centres, fg, offset, cfg)
+    assert len(inst.scores) == 2
+    assert len(set(inst.labels[:10])) == 1 and len(set(inst.labels[10:])) == 1 and inst.labels[0] != inst.labels[10]
+    # without offsets the same voxels are one object
+    assert len(cluster_voxels(centres, fg, np.zeros_like(centres), cfg).scores) == 1
+    # background voxels are never in an instance
+    fg[:10] = 0.1
+    inst = cluster_voxels(centres, fg, offset, cfg)
+    assert (inst.labels[:10] == -1).all() and len(inst.scores) == 1
+
+
+def test_examples_have_consistent_targets(tiny_scenes):
+    cfg = parse_segmenter_config(TINY_NET)
+    ex = make_example(tiny_scenes[0], cfg, np.random.default_rng(0))
+    assert ex.feats.shape == (len(ex.coords), 6) and np.isfinite(ex.feats).all()
+    assert 0 < ex.fg.mean() < 1
+    assert np.all(ex.offset[ex.fg == 0] == 0)
+    # the same generator state gives the same example (determinism of training)
+    ex2 = make_example(tiny_scenes[0], cfg, np.random.default_rng(0))
+    assert np.array_equal(ex.coords, ex2.coords) and np.array_equal(ex.feats, ex2.feats)
+    color = parse_segmenter_config({**TINY_NET, "net": {**TINY_NET["net"], "use_color": True}})
+    assert make_example(tiny_scenes[0], color, np.random.default_rng(0)).feats.shape[1] == 9
+
+
+def test_loss_falls_over_a_few_steps_on_two_generated_scenes(tiny_scenes, tmp_path):
+    cfg = parse_segmenter_config(TINY_NET)
+    fixed = [make_example(s, cfg, None) for s in tiny_scenes]
+    torch.manual_seed(0)
+    model = Segmenter(cfg.net)
+    before = float(example_loss(model, fixed, cfg)[0].detach())
+    train_segmenter(cfg, tiny_scenes, tmp_path / "run", seed=0, budget=Budget(steps=15))
+    after_model = load_segmenter(tmp_path / "run" / "last.pt").model
+    after = float(example_loss(after_model, fixed, cfg)[0].detach())
+    assert after < 0.8 * before, (before, after)
+
+
+@pytest.fixture
+def one_thread():
+    # multi-threaded CPU reductions (index_add_, matmul) are not bit-reproducible; one thread is
+    old = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(old)
+
+
+def test_resumed_training_equals_an_uninterrupted_run(tiny_scenes, tmp_path, monkeypatch, one_thread):
+    cfg = parse_segmenter_config(TINY_NET)
+    train_segmenter(cfg, tiny_scenes, tmp_path / "full", seed=3, budget=Budget(steps=4))
+    monkeypatch.setattr(train_mod, "CHECKPOINT_EVERY_S", -1.0)  # save after every step
+
+    def stop(row):
+        if row["step"] == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        train_segmenter(cfg, tiny_scenes, tmp_path / "cut", seed=3, budget=Budget(steps=4), on_step=stop)
+    assert load_segmenter(tmp_path / "cut" / "last.pt").progress["step"] == 2
+    rec = train_segmenter(cfg, tiny_scenes, tmp_path / "cut", seed=3, budget=Budget(steps=4))
+    assert rec.steps == 4
+    full = load_segmenter(tmp_path / "full" / "last.pt").model.state_dict()
+    cut = load_segmenter(tmp_path / "cut" / "last.pt").model.state_dict()
+    assert all(torch.equal(full[k], cut[k]) for k in full)
+
+
+class _Evil:
+    def __init__(self, marker: str):
+        self.marker = marker
+
+    def __reduce__(self):
+        return (open, (self.marker, "w"))
+
+
+def test_a_checkpoint_that_would_run_code_is_refused(tmp_path):
+    marker = tmp_path / "pwned"
+    evil = tmp_path / "evil.pt"
+    torch.save({"format": "assist3d-segmenter", "payload": _Evil(str(marker))}, evil)
+    with pytest.raises(DataError, match=r"refused.*io\.open"):
+        load_segmenter(evil)
+    assert not marker.exists()
+    raw = tmp_path / "raw.pt"
+    raw.write_bytes(pickle.dumps({"x": _Evil(str(marker))}))
+    with pytest.raises(DataError):
+        load_segmenter(raw)
+    assert not marker.exists()
+    (tmp_path / "junk.pt").write_bytes(b"not a checkpoint")
+    with pytest.raises(DataError, match="not a readable checkpoint"):
+        load_segmenter(tmp_path / "junk.pt")
+    torch.save({"format": "something-else"}, tmp_path / "other.pt")
+    with pytest.raises(DataError, match="not an assist3d segmenter checkpoint"):
+        load_segmenter(tmp_path / "other.pt")
+
+
+def test_the_mask3d_checkpoint_loader_is_safe_too(tmp_path):
+    from assist3d.engine.train import load_checkpoint
+
+    marker = tmp_path / "pwned"
+    torch.save({"model": {}, "config": {}, "x": _Evil(str(marker))}, tmp_path / "evil.pt")
+    with pytest.raises(DataError):
+        load_checkpoint(tmp_path / "evil.pt")
+    assert not marker.exists()
+
+
+def test_half_precision_checkpoint_round_trip(tmp_path):
+    cfg = parse_segmenter_config(TINY_NET)
+    torch.manual_seed(0)
+    model = Segmenter(cfg.net)
+    save_segmenter(tmp_path / "m.pt", model, cfg, meta={"note": "x"}, half=True)
+    loaded = load_segmenter(tmp_path / "m.pt")
+    assert loaded.config == cfg and loaded.meta == {"note": "x"}
+    for k, v in model.state_dict().items():
+        assert torch.allclose(v.float(), loaded.model.state_dict()[k], atol=1e-2, rtol=1e-2)
+
+
+def test_probe_runs_end_to_end_writes_the_json_contract_and_resumes(tiny_data, tmp_path):
+    out = tmp_path / "probe"
+    cfg = tmp_path / "seg.yaml"
+    cfg.write_text(json.dumps(TINY_NET))
+    args = ["probe", "--train", f"assist3d:{tiny_data}", "--eval", f"assist3d:{tiny_data}", "--steps", "2",
+            "--seeds", "2", "--out", str(out), "--config", str(cfg), "--json"]
+    r = runner.invoke(app, args)
+    assert r.exit_code == 0, r.output
+    data = json.loads(r.stdout[r.stdout.index("{"):])
+    assert len(data["runs"]) == 2
+    for run in data["runs"]:
+        assert {"AP", "AP50", "AP25", "AR", "train_seconds", "steps"} <= set(run)
+        assert run["steps"] == 2 and run["train_seconds"] > 0
+    for k in ("AP", "AP50", "AP25", "AR"):
+        vals = [run[k] for run in data["runs"]]
+        assert data["mean"][k] == pytest.approx(np.mean(vals), abs=1e-6)
+        assert data["std"][k] == pytest.approx(np.std(vals, ddof=1), abs=1e-6)
+    assert (out / "seed_1" / "result.json").is_file() and (out / "seed_0" / "model.pt").is_file()
+    assert sorted(p.name for p in (out / "seed_0" / "pred").glob("*.npz")) == ["scene_000000.npz", "scene_000001.npz"]
+    # a re-run reads the finished seeds back: same figures, no training
+    stamp = (out / "seed_0" / "model.pt").stat().st_mtime_ns
+    r2 = runner.invoke(app, args)
+    assert r2.exit_code == 0, r2.output
+    assert json.loads(r2.stdout[r2.stdout.index("{"):])["runs"] == data["runs"]
+    assert (out / "seed_0" / "model.pt").stat().st_mtime_ns == stamp
+    # other settings in the same folder are refused
+    r3 = runner.invoke(app, [("3" if a == "2" and args[i - 1] == "--steps" else a) for i, a in enumerate(args)])
+    assert r3.exit_code != 0 and "other settings" in str(r3.exception or r3.output)
+
+
+def _room_with_boxes() -> object:
+    return make_toy_scene("toy", rng=np.random.default_rng(4), num_objects=4, room_m=4.0, density_per_m2=3000)
+
+
+def test_geometric_reference_finds_boxes_on_a_floor_between_walls():
+    s = _room_with_boxes()
+    seg = segment_geometric(s.coord)
+    m = summarize([match_scene(s.instance, seg.masks, seg.scores, valid=s.valid)])
+    assert m["AP50"] > 0.7, m.summary
+    assert seg.masks.shape[1] == len(s.coord) and (seg.masks.sum(0) <= 1).all()
+
+
+def _write_model(path: Path) -> Path:
+    cfg = parse_segmenter_config(TINY_NET)
+    torch.manual_seed(0)
+    return save_segmenter(path, Segmenter(cfg.net), cfg)
+
+
+def test_segment_a_ply_and_an_npy_and_refuse_bad_input(tmp_path):
+    from assist3d.data.ply import read_ply, write_ply
+
+    s = _room_with_boxes()
+    ckpt = _write_model(tmp_path / "m.pt")
+    write_ply(tmp_path / "room.ply", s.coord, s.color)
+    r = runner.invoke(app, ["segment", str(tmp_path / "room.ply"), "--out", str(tmp_path / "o"),
+                            "--checkpoint", str(ckpt), "--json", "--png"])
+    assert r.exit_code == 0, r.output
+    row = json.loads(r.stdout.strip().splitlines()[-1])
+    assert row["points"] == len(s.coord)
+    with np.load(tmp_path / "o" / "room.npz") as z:
+        assert z["masks"].shape == (row["instances"], len(s.coord)) and len(z["scores"]) == row["instances"]
+    assert len(read_ply(tmp_path / "o" / "room.ply").xyz()) == len(s.coord)
+    assert (tmp_path / "o" / "room.png").stat().st_size > 1000
+    # geometric method on an (N, 6) array with one NaN row: a result, the NaN point in no mask
+    a = np.concatenate([s.coord, s.color.astype(np.float32)], 1)
+    a[5, 0] = np.nan
+    np.save(tmp_path / "scan.npy", a)
+    r = runner.invoke(app, ["segment", str(tmp_path / "scan.npy"), "--out", str(tmp_path / "g"), "--method", "geometric"])
+    assert r.exit_code == 0, r.output
+    with np.load(tmp_path / "g" / "scan.npz") as z:
+        assert len(z["scores"]) >= 3 and not z["masks"][:, 5].any()
+    # bad inputs: one clear line each, no traceback
+    (tmp_path / "empty.ply").write_bytes(b"")
+    np.save(tmp_path / "wrong.npy", np.zeros((10, 4), np.float32))
+    np.save(tmp_path / "nan.npy", np.full((10, 3), np.nan, np.float32))
+    np.save(tmp_path / "none.npy", np.zeros((0, 3), np.float32))
+    for name, expect in (("empty.ply", "PLY"), ("wrong.npy", "(N, 3)"), ("nan.npy", "finite"), ("none.npy", "no points"),
+                         ("missing.ply", "not found")):
+        r = runner.invoke(app, ["segment", str(tmp_path / name), "--out", str(tmp_path / "bad"), "--checkpoint", str(ckpt)])
+        assert r.exit_code != 0 and isinstance(r.exception, (DataError, SystemExit)), (name, r.output)
+        assert expect in str(r.exception) or expect in r.output, (name, str(r.exception), r.output)
+
+
+SHARED_SCAN = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "real" / "scannet_scene0451_01.npy"
+
+
+def test_shipped_model_segments_the_real_scan_and_beats_the_geometric_reference(real_scan_path):
+    import time
+
+    from assist3d.segmenter.shipped import shipped_model_path
+
+    path = shipped_model_path()
+    assert path.stat().st_size <= 5 * 1024 * 1024
+    loaded = load_segmenter(path)
+    assert loaded.meta.get("train_data") == "generated only"
+    s = open_dataset(f"array:{real_scan_path}")[0]
+    t0 = time.perf_counter()
+    seg = segment_points(loaded.model, loaded.config, s.coord, s.color)
+    assert time.perf_counter() - t0 < 30
+    learned = summarize([match_scene(s.instance, seg.masks, seg.scores, valid=s.valid)])
+    geo = segment_geometric(s.coord)
+    reference = summarize([match_scene(s.instance, geo.masks, geo.scores, valid=s.valid)])
+    assert learned["AP50"] > reference["AP50"], (learned.summary, reference.summary)
