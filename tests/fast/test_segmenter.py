@@ -145,6 +145,10 @@ def test_resumed_training_equals_an_uninterrupted_run(tiny_scenes, tmp_path, mon
     full = load_segmenter(tmp_path / "full" / "last.pt").model.state_dict()
     cut = load_segmenter(tmp_path / "cut" / "last.pt").model.state_dict()
     assert all(torch.equal(full[k], cut[k]) for k in full)
+    log_full = (tmp_path / "full" / "train_log.csv").read_text().splitlines()
+    log_cut = (tmp_path / "cut" / "train_log.csv").read_text().splitlines()
+    assert [r.split(",")[0] for r in log_cut] == ["step", "1", "2", "3", "4"]
+    assert [r.split(",")[3:] for r in log_cut] == [r.split(",")[3:] for r in log_full]  # same losses
 
 
 class _Evil:

@@ -148,11 +148,11 @@ def _scan_from_file(path: Path) -> tuple[str, np.ndarray, np.ndarray | None, obj
 
 def _inputs(spec: str):
     """Yield (scene_id, coord, color, sample-with-GT-or-None) for a file or a reader spec."""
-    p = Path(spec)
-    if p.suffix.lower() in (".ply", ".npy") or p.exists():
-        yield _scan_from_file(p)
+    from ..data import FORMATS, open_dataset
+
+    if spec.split(":", 1)[0].strip().lower() not in FORMATS or Path(spec).exists():
+        yield _scan_from_file(Path(spec))
         return
-    from ..data import open_dataset
 
     ds = open_dataset(spec)
     for sid in ds.scene_ids:

@@ -37,6 +37,9 @@ class AugmentConfig(_Section):
     crop_m: float = Field(6.0, ge=0.0, le=100.0, description="random square crop edge in metres (0 = whole scene)")
     keep_min: float = Field(0.35, gt=0.0, le=1.0, description="lowest fraction of points kept (density matching)")
     keep_max: float = Field(0.8, gt=0.0, le=1.0, description="highest fraction of points kept")
+    top_cut_p: float = Field(0.0, ge=0.0, le=1.0, description="probability of removing everything above a random "
+                             "height (real scans often miss upper walls and high shelves)")
+    top_cut_range: tuple[float, float] = Field((1.4, 3.0), description="height range of that cut, metres above the floor")
     scale: float = Field(0.1, ge=0.0, le=0.5, description="uniform scale jitter +-")
     tilt_deg: float = Field(1.0, ge=0.0, le=10.0, description="random tilt about x and y, +- degrees")
     floor_shift: tuple[float, float] = Field((-0.08, 0.05), description="random z translation range, metres")

@@ -62,6 +62,9 @@ def augment(scene: Scene, cfg: AugmentConfig, rng: np.random.Generator) -> Scene
         rows = rows[inside]
     keep = rng.uniform(cfg.keep_min, max(cfg.keep_min, cfg.keep_max))
     rows = rows[rng.random(len(rows)) < keep]
+    if cfg.top_cut_p > 0 and rng.random() < cfg.top_cut_p and len(rows):
+        floor = float(np.percentile(xyz[rows, 2], 2.0))
+        rows = rows[xyz[rows, 2] < floor + rng.uniform(*cfg.top_cut_range)]
     if len(rows) < 10:  # a degenerate crop: fall back to the whole scene
         rows = np.arange(len(xyz))
     xyz = xyz[rows]

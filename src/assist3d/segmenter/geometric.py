@@ -29,6 +29,9 @@ class GeometricConfig:
     seed: int = 0
 
 
+WALL_BEHIND = 0.15
+
+
 def _fit_plane(p: np.ndarray) -> tuple[np.ndarray, float] | None:
     n = np.cross(p[1] - p[0], p[2] - p[0])
     norm = np.linalg.norm(n)
@@ -45,8 +48,11 @@ def _structural(n: np.ndarray, d: float, xyz: np.ndarray, inliers: np.ndarray, f
         return z < floor_z + 0.2 or z > top_z - 0.3
     if abs(n[2]) < 0.1:
         side = xyz @ n + d
-        # a wall has (almost) the whole scan on one side of it
-        return min(float((side > 0.1).mean()), float((side < -0.1).mean())) < 0.03
+        # a wall has most of the scan on one side of it (what lies behind is seen through doors and
+        # windows) and is tall
+        z = xyz[inliers, 2]
+        behind = min(float((side > 0.1).mean()), float((side < -0.1).mean()))
+        return behind < WALL_BEHIND and float(np.percentile(z, 95) - np.percentile(z, 5)) > 1.0
     return False
 
 

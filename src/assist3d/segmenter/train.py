@@ -9,6 +9,7 @@ number of steps it reached is recorded).
 
 from __future__ import annotations
 
+import csv
 import logging
 import math
 import time
@@ -85,6 +86,29 @@ def example_loss(model: Segmenter, examples: Sequence[Example], cfg: SegmenterCo
                   "direction": float(direction.detach())}
 
 
+LOG_FIELDS = ("step", "train_seconds", "lr", "loss", "bce", "offset", "direction")
+
+
+def _truncate_log(path: Path, step: int) -> None:
+    """Keep the log rows up to ``step`` (those of the checkpoint a run resumes from)."""
+    if not path.is_file():
+        return
+    lines = path.read_text().splitlines()
+    kept = lines[:1] + [ln for ln in lines[1:] if ln and int(ln.split(",", 1)[0]) <= step]
+    path.write_text("\n".join(kept) + "\n" if kept else "")
+
+
+def _append_log(path: Path, rows: list[dict]) -> None:
+    if not rows:
+        return
+    new = not path.is_file() or path.stat().st_size == 0
+    with open(path, "a", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=LOG_FIELDS)
+        if new:
+            w.writeheader()
+        w.writerows(rows)
+
+
 def _lr(cfg: SegmenterConfig, progress: float) -> float:
     p = min(max(progress, 0.0), 1.0)
     return cfg.optim.lr * (0.01 + 0.99 * 0.5 * (1 + math.cos(math.pi * p)))
@@ -115,10 +139,15 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
         last_loss = float(loaded.progress.get("loss", float("nan")))
         log.info("resumed %s at step %d (%.0f s trained)", last, step, seconds)
     meta = dict(meta or {})
+    log_path = out / "train_log.csv"
+    _truncate_log(log_path, step)
+    pending: list[dict] = []
 
     def save() -> None:
         progress = {"step": step, "train_seconds": seconds, "loss": last_loss, "seed": seed, "budget": budget.as_dict()}
         save_segmenter(last, model, cfg, meta={**meta, **progress}, optimizer=opt, progress=progress)
+        _append_log(log_path, pending)  # rows reach the log only with the checkpoint that covers them
+        pending.clear()
 
     last_save = time.perf_counter()
     model.train()
@@ -139,6 +168,8 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
         step += 1
         seconds += time.perf_counter() - t0
         last_loss = parts["loss"]
+        pending.append({"step": step, "train_seconds": round(seconds, 3), "lr": opt.param_groups[0]["lr"],
+                        **{k: round(v, 6) for k, v in parts.items()}})
         if on_step is not None:
             on_step({"step": step, "train_seconds": seconds, "progress": budget.progress(step, seconds),
                      "lr": opt.param_groups[0]["lr"], **parts})

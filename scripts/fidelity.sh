@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# The paper's generator comparison on real scans, at small scale (docs/fidelity.md):
+# one dataset per generator (equal scene counts, same catalog, seed and render settings), the CPU
+# segmenter trained on each for the same number of steps with K seeds, zero-shot AP on the real dev
+# scans; plus the geometric reference and a real-only model (leave-one-room-out over the dev scans).
+# Resumable at every level: re-running completes what is missing and recomputes nothing finished.
+#
+#   scripts/fidelity.sh OUT_DIR
+#
+# Environment: STEPS (training steps per run, default 600), SEEDS (default 3), SCENES (scenes per
+# generator, default 60), GENERATORS (default "assist3d randomrooms holodeck-style no-context
+# mesh-sampled"), ASSETS (catalog folder; the docs use Sweet Home 3D + the procedural library),
+# DEV (real scans, default ../shared/data/real/dev), THREADS (torch threads, default 2),
+# SKIP_REAL=1 to leave out the leave-one-room-out rows.
+set -euo pipefail
+
+OUT=${1:?usage: scripts/fidelity.sh OUT_DIR}
+STEPS=${STEPS:-600}
+SEEDS=${SEEDS:-3}
+SCENES=${SCENES:-60}
+GENERATORS=${GENERATORS:-"assist3d randomrooms holodeck-style no-context mesh-sampled"}
+HERE="$(cd "$(dirname "$0")/.." && pwd)"
+DEV=${DEV:-$HERE/../shared/data/real/dev}
+THREADS=${THREADS:-2}
+if [[ -z "${ASSIST3D:-}" ]]; then
+  if command -v assist3d >/dev/null 2>&1; then ASSIST3D=assist3d; else ASSIST3D="$HERE/.venv/bin/assist3d"; fi
+fi
+ASSET_ARGS=()
+if [[ -n "${ASSETS:-}" ]]; then ASSET_ARGS=(--assets "$ASSETS"); fi
+mkdir -p "$OUT/data" "$OUT/probe"
+
+for g in $GENERATORS; do
+  "$ASSIST3D" generate --out "$OUT/data/$g" --num-scenes "$SCENES" --seed 0 --preset "$g" --workers 2 \
+    "${ASSET_ARGS[@]}" --json > "$OUT/data/$g.generate.json"
+done
+
+for g in $GENERATORS; do
+  "$ASSIST3D" probe --train "assist3d:$OUT/data/$g" --eval "array:$DEV" --steps "$STEPS" --seeds "$SEEDS" \
+    --threads "$THREADS" --out "$OUT/probe/$g" --json > "$OUT/probe/$g.json"
+  echo "probe $g done" >&2
+done
+
+# the non-learned reference
+"$ASSIST3D" segment "array:$DEV" --method geometric --out "$OUT/probe/geometric/pred" > /dev/null
+"$ASSIST3D" evaluate --gt "array:$DEV" --pred "$OUT/probe/geometric/pred" --json --per-scene > "$OUT/probe/geometric.json"
+
+# real-only: leave one room out (rescans of a room share the first 9 characters of their name)
+if [[ "${SKIP_REAL:-0}" != 1 ]]; then
+  rooms=$(ls "$DEV"/*.npy | xargs -n1 basename | cut -c1-9 | sort -u)
+  for r in $rooms; do
+    train_args=(); eval_args=()
+    for f in "$DEV"/*.npy; do
+      if [[ "$(basename "$f" | cut -c1-9)" == "$r" ]]; then eval_args+=(--eval "array:$f"); else train_args+=(--train "array:$f"); fi
+    done
+    "$ASSIST3D" probe "${train_args[@]}" "${eval_args[@]}" --steps "$STEPS" --seeds "$SEEDS" --threads "$THREADS" \
+      --out "$OUT/probe/real-loro/$r" --json > "$OUT/probe/real-loro/$r.json"
+  done
+fi
+
+PY="$HERE/.venv/bin/python"; [[ -x "$PY" ]] || PY=python3
+"$PY" "$HERE/scripts/fidelity_table.py" "$OUT" "$DEV" | tee "$OUT/table.md"

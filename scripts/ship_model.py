@@ -1,0 +1,43 @@
+"""Copy a trained segmenter into the package as the shipped model (float16 weights, < 5 MB).
+
+    python scripts/ship_model.py PROBE_DIR/seed_K/model.pt [--note TEXT]
+
+Refuses a model whose training sets are not all generated (``assist3d:`` specs): the shipped model
+is trained on generated data only. Records the training sets, steps and seconds in its metadata.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from assist3d.segmenter.checkpoint import load_segmenter, save_segmenter
+from assist3d.segmenter.shipped import SHIPPED_NAME
+
+LIMIT = 5 * 1024 * 1024
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("model", type=Path)
+    ap.add_argument("--note", default="")
+    args = ap.parse_args()
+    loaded = load_segmenter(args.model)
+    train = loaded.meta.get("train", [])
+    if not train or not all(str(s).startswith("assist3d:") for s in train):
+        raise SystemExit(f"{args.model}: trained on {train}; the shipped model must be trained on generated data only")
+    meta = {"train_data": "generated only", "train": [Path(s.split(':', 1)[1]).name for s in train],
+            "steps": loaded.meta.get("step"), "train_seconds": loaded.meta.get("train_seconds"),
+            "seed": loaded.meta.get("seed"), "note": args.note}
+    dest = Path(__file__).resolve().parents[1] / "src" / "assist3d" / "resources" / "models" / SHIPPED_NAME
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    save_segmenter(dest, loaded.model, loaded.config, meta=meta, half=True)
+    size = dest.stat().st_size
+    if size > LIMIT:
+        dest.unlink()
+        raise SystemExit(f"{dest}: {size} bytes, over the 5 MB limit; shrink the net")
+    print(f"{dest}: {size / 1e6:.2f} MB, {meta}")
+
+
+if __name__ == "__main__":
+    main()
