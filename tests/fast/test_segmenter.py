@@ -12,6 +12,7 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
+from test_generate_pipeline import TINY  # noqa: E402
 from typer.testing import CliRunner  # noqa: E402
 
 from assist3d.cli import app  # noqa: E402
@@ -32,14 +33,7 @@ from assist3d.segmenter.infer import segment_points  # noqa: E402
 from assist3d.segmenter.model import Segmenter  # noqa: E402
 from assist3d.segmenter.train import Budget, example_loss, train_segmenter  # noqa: E402
 
-TINY_GEN = {
-    "seed": 5,
-    "assets": {"procedural_count": 60},
-    "selection": {"floor_count": 6, "wall_count": 2, "on_top_count": 1},
-    "room": {"area_min": 10.0, "area_max": 16.0},
-    "layout": {"group_budget_s": 120.0},
-    "render": {"width": 80, "height": 60, "fx": 72.2, "fy": 72.2, "vantage_points": 2, "views_per_point": 6},
-}
+TINY_GEN = {**TINY, "seed": 5}  # the pipeline tests' tiny scenes (6 floor, 2 wall objects, 80 x 60 views)
 TINY_NET = {"net": {"voxel_size": 0.1, "stem_channels": 8, "enc_channels": [8, 16, 16, 24],
                     "dec_channels": [24, 16, 16, 16]},
             "augment": {"crop_m": 0.0}, "optim": {"batch_size": 2, "lr": 0.01}}

@@ -29,7 +29,8 @@ def elastic_distortion(xyz: np.ndarray, granularity: float, magnitude: float, *,
     return (xyz + interp(xyz) * magnitude).astype(xyz.dtype)
 
 
-def _rotation(ax: float, ay: float, az: float) -> np.ndarray:
+def rotation_matrix(ax: float, ay: float, az: float) -> np.ndarray:
+    """``Rz @ Ry @ Rx`` for angles in radians about x, y and z."""
     cx, sx, cy, sy, cz, sz = np.cos(ax), np.sin(ax), np.cos(ay), np.sin(ay), np.cos(az), np.sin(az)
     rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
     ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
@@ -49,7 +50,7 @@ def augment_points(coord: np.ndarray, color: np.ndarray, cfg: AugmentConfig, *,
         for gran, mag in cfg.elastic:
             xyz = elastic_distortion(xyz, gran, mag, rng=rng)
     xyz = xyz * rng.uniform(1 - cfg.scale, 1 + cfg.scale, 3)
-    rot = _rotation(rng.uniform(-cfg.rotate_xy_rad, cfg.rotate_xy_rad),
+    rot = rotation_matrix(rng.uniform(-cfg.rotate_xy_rad, cfg.rotate_xy_rad),
                     rng.uniform(-cfg.rotate_xy_rad, cfg.rotate_xy_rad),
                     rng.uniform(-cfg.rotate_z_rad, cfg.rotate_z_rad))
     xyz = xyz @ rot.T

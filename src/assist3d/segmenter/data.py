@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..contracts import PointSample
+from ..engine.augment import rotation_matrix
 from .config import AugmentConfig, SegmenterConfig
 from .features import Voxels, voxel_features, voxelize
 
@@ -42,14 +43,6 @@ class Scene:
         return cls(coord=np.asarray(s.coord, np.float32), color=np.asarray(s.color, np.uint8), instance=inst)
 
 
-def _rot(ax: float, ay: float, az: float) -> np.ndarray:
-    cx, sx, cy, sy, cz, sz = np.cos(ax), np.sin(ax), np.cos(ay), np.sin(ay), np.cos(az), np.sin(az)
-    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return rz @ ry @ rx
-
-
 def augment(scene: Scene, cfg: AugmentConfig, rng: np.random.Generator) -> Scene:
     """A randomly cropped, thinned, moved and noised copy of ``scene``."""
     xyz = scene.coord.astype(np.float64)
@@ -72,7 +65,7 @@ def augment(scene: Scene, cfg: AugmentConfig, rng: np.random.Generator) -> Scene
     if rng.random() < 0.5:
         xyz[:, 0] = -xyz[:, 0]
     t = np.deg2rad(cfg.tilt_deg)
-    xyz = xyz @ _rot(rng.uniform(-t, t), rng.uniform(-t, t), rng.uniform(-np.pi, np.pi)).T
+    xyz = xyz @ rotation_matrix(rng.uniform(-t, t), rng.uniform(-t, t), rng.uniform(-np.pi, np.pi)).T
     xyz *= rng.uniform(1 - cfg.scale, 1 + cfg.scale)
     xyz[:, 2] += rng.uniform(*cfg.floor_shift)
     xyz += rng.normal(0.0, rng.uniform(*cfg.jitter), xyz.shape)
