@@ -297,3 +297,17 @@ def test_shipped_model_segments_the_real_scan_and_beats_the_geometric_reference(
     geo = segment_geometric(s.coord)
     reference = summarize([match_scene(s.instance, geo.masks, geo.scores, valid=s.valid)])
     assert learned["AP50"] > reference["AP50"], (learned.summary, reference.summary)
+
+
+def test_segment_reads_reader_specs_and_reports_ap_when_labels_are_known(tmp_path):
+    s = _room_with_boxes()
+    a = np.zeros((len(s.coord), 8), np.float32)
+    a[:, :3], a[:, 3:6] = s.coord, s.color
+    a[:, 6] = np.where(s.instance >= 0, 3, 2)  # cabinet-like objects on a floor
+    a[:, 7] = s.instance + 1
+    np.save(tmp_path / "room.npy", a)
+    for spec in (f"array:{tmp_path / 'room.npy'}", f"array:{tmp_path}", str(tmp_path / "room.npy")):
+        r = runner.invoke(app, ["segment", spec, "--out", str(tmp_path / "o"), "--method", "geometric", "--json"])
+        assert r.exit_code == 0, (spec, r.output)
+        row = json.loads(r.stdout.strip().splitlines()[-1])
+        assert row["scene"] == "room" and row["AP50"] > 0.7, (spec, row)
