@@ -101,6 +101,20 @@ def test_examples_have_consistent_targets(tiny_scenes):
     assert make_example(tiny_scenes[0], color, np.random.default_rng(0)).feats.shape[1] == 9
 
 
+def test_crop_of_a_scene_narrower_than_the_window_never_fails():
+    # the window centre once came from rng.uniform(low, high) with low > high by rounding
+    from assist3d.segmenter.config import AugmentConfig
+    from assist3d.segmenter.data import augment
+
+    c = np.zeros((50, 3), np.float32)
+    c[:, 0] = np.float32(0.1) + np.linspace(0, 0.3, 50).astype(np.float32)
+    c[:, 1] = np.linspace(0, 9, 50)
+    scene = Scene(coord=c, color=np.zeros((50, 3), np.uint8), instance=np.zeros(50, np.int32))
+    for i in range(200):
+        out = augment(scene, AugmentConfig(keep_min=1.0, keep_max=1.0), np.random.default_rng(i))
+        assert len(out.coord) >= 10 and np.isfinite(out.coord).all()
+
+
 def test_loss_falls_over_a_few_steps_on_two_generated_scenes(tiny_scenes, tmp_path):
     cfg = parse_segmenter_config(TINY_NET)
     fixed = [make_example(s, cfg, None) for s in tiny_scenes]

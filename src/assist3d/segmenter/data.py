@@ -50,7 +50,11 @@ def augment(scene: Scene, cfg: AugmentConfig, rng: np.random.Generator) -> Scene
     if cfg.crop_m > 0:
         lo, hi = xyz[:, :2].min(0), xyz[:, :2].max(0)
         half = cfg.crop_m / 2
-        centre = np.array([rng.uniform(a + min(half, (b - a) / 2), b - min(half, (b - a) / 2)) for a, b in zip(lo, hi)])
+        # centre of a window that stays inside the scene (or the scene's middle when it is smaller);
+        # written as low + span * u so rounding can never make the span negative
+        low = np.minimum(lo + half, (lo + hi) / 2)
+        span = np.maximum(np.maximum(hi - half, (lo + hi) / 2) - low, 0.0)
+        centre = low + span * np.array([rng.random(), rng.random()])
         inside = np.all(np.abs(xyz[:, :2] - centre) <= half, axis=1)
         rows = rows[inside]
     keep = rng.uniform(cfg.keep_min, max(cfg.keep_min, cfg.keep_max))
