@@ -101,14 +101,15 @@ def test_examples_have_consistent_targets(tiny_scenes):
     assert make_example(tiny_scenes[0], color, np.random.default_rng(0)).feats.shape[1] == 9
 
 
-def test_crop_of_a_scene_narrower_than_the_window_never_fails():
-    # the window centre once came from rng.uniform(low, high) with low > high by rounding
+def test_crop_window_centre_never_has_a_negative_range():
+    # the window centre once came from rng.uniform(low, high), with low > high by one rounding step
     from assist3d.segmenter.config import AugmentConfig
     from assist3d.segmenter.data import augment
 
+    # the extent of a generated mesh-sampled scene where a + d/2 > b - d/2 after rounding
     c = np.zeros((50, 3), np.float32)
-    c[:, 0] = np.float32(0.1) + np.linspace(0, 0.3, 50).astype(np.float32)
-    c[:, 1] = np.linspace(0, 9, 50)
+    c[:, 0] = np.linspace(0.0, 5.644425, 50)
+    c[:, 1] = np.linspace(-2.861023e-09, 4.287735, 50)
     scene = Scene(coord=c, color=np.zeros((50, 3), np.uint8), instance=np.zeros(50, np.int32))
     for i in range(200):
         out = augment(scene, AugmentConfig(keep_min=1.0, keep_max=1.0), np.random.default_rng(i))
