@@ -21,6 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..engine.voxelize import majority_label
+
 #: Channels of the geometry-only input, in order.
 GEOMETRY_CHANNELS: tuple[str, ...] = ("one", "height", "abs_nz", "linearity", "planarity", "scattering")
 COLOR_CHANNELS: tuple[str, ...] = ("r", "g", "b")
@@ -77,21 +79,9 @@ def voxelize(coord: np.ndarray, size: float, color: np.ndarray | None = None,
         col /= counts[:, None] * 255.0
     inst = np.full(v, -1, np.int64)
     if instance is not None:
-        inst = _majority(inverse, instance.astype(np.int64), v)
+        inst = majority_label(inverse, instance.astype(np.int64), v)
     return Voxels(size=size, coords=coords.astype(np.int32), centres=centres, color=col.astype(np.float32),
                   instance=inst, inverse=inverse.astype(np.int64), counts=counts.astype(np.int64))
-
-
-def _majority(group: np.ndarray, label: np.ndarray, n_groups: int) -> np.ndarray:
-    """Most frequent label per group (ties: the smaller label)."""
-    pairs, counts = np.unique(np.stack([group, label], 1), axis=0, return_counts=True)
-    order = np.lexsort((pairs[:, 1], -counts, pairs[:, 0]))
-    pairs = pairs[order]
-    first = np.ones(len(pairs), bool)
-    first[1:] = pairs[1:, 0] != pairs[:-1, 0]
-    out = np.full(n_groups, -1, np.int64)
-    out[pairs[first, 0]] = pairs[first, 1]
-    return out
 
 
 def floor_height(centres: np.ndarray, percentile: float = 2.0) -> float:
