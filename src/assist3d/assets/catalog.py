@@ -25,8 +25,9 @@ from typing import Iterable, Sequence
 import numpy as np
 
 from ..contracts import GROUPS, AssetRecord, MeshData, SkippedAsset
-from ..errors import AssetError
+from ..errors import AssetError, shown
 from ..fileio import write_json_atomic, write_npz_atomic
+from ..paths import inside
 from ..rng import stable_hash
 
 log = logging.getLogger(__name__)
@@ -144,7 +145,7 @@ class Catalog:
         try:
             return self._records[asset_id]
         except KeyError:
-            raise AssetError(f"{self.root}: no asset with id {asset_id!r}") from None
+            raise AssetError(f"{self.root}: no asset with id '{shown(asset_id)}'") from None
 
     def group(self, group: str) -> tuple[AssetRecord, ...]:
         """Records that belong to ``group`` ('floor', 'wall' or 'obj'), in id order."""
@@ -164,7 +165,9 @@ class Catalog:
             if mesh is not None:
                 self._mesh_cache.move_to_end(rec.id)
                 return mesh
-        mesh = load_mesh_file(self.root / rec.mesh_file)
+        path = inside(self.root, rec.mesh_file, what=f"{self.root / INDEX_NAME}: asset '{shown(rec.id)}' mesh_file",
+                      error=AssetError)
+        mesh = load_mesh_file(path)
         with self._lock:
             self._mesh_cache[rec.id] = mesh
             while len(self._mesh_cache) > self._mesh_cache_size:

@@ -11,11 +11,12 @@ from __future__ import annotations
 import logging
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Callable, Sequence, TypeVar
 
 from ..contracts import AssetRecord, MeshData, SkippedAsset
+from ..errors import shown
+from ..interrupts import worker_pool
 from .catalog import Catalog
 
 log = logging.getLogger(__name__)
@@ -72,7 +73,7 @@ def run_import(catalog: Catalog, items: Sequence[Item],
         if isinstance(result, SkippedAsset):
             all_skipped.append(result)
             catalog.add_skipped(result, source, f"{source}:{part}/")
-            log.info("%s: skipped %s: %s", source, result.path, result.reason)
+            log.info("%s: skipped %s: %s", source, shown(result.path, 400), shown(result.reason))
         else:
             record, mesh = result
             catalog.add(record, mesh)
@@ -89,7 +90,7 @@ def run_import(catalog: Catalog, items: Sequence[Item],
     else:
         # the workers are forked (fast start); callers must not run threads that hold locks the
         # workers need (the CLI's progress bar refreshes from this thread, not its own)
-        with ProcessPoolExecutor(max_workers=n_workers) as pool:
+        with worker_pool(n_workers) as pool:  # stopped at once on an interrupt
             for item, result in zip(items, pool.map(convert, items, chunksize=2)):
                 handle(item, result)
     catalog.save()

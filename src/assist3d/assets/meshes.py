@@ -41,7 +41,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..contracts import GROUPS, AssetRecord, MeshData, SkippedAsset
-from ..errors import AssetError
+from ..errors import AssetError, shown
 from .catalog import Catalog
 from .importer import ImportReport, Progress, run_import
 from .naming import assign_groups, class_from_name
@@ -250,7 +250,7 @@ def convert_item(item: MeshItem) -> tuple[AssetRecord, MeshData] | SkippedAsset:
     try:
         return _convert(item, label)
     except Exception as e:  # a loader failure on strange data: report it, keep importing
-        log.warning("meshes: unexpected error on %s", label, exc_info=True)
+        log.warning("meshes: unexpected error on %s", shown(label, 400), exc_info=True)
         return SkippedAsset(label, f"unexpected error ({type(e).__name__}: {e})")
 
 
@@ -269,7 +269,7 @@ def _convert(item: MeshItem, label: str) -> tuple[AssetRecord, MeshData] | Skipp
             try:
                 arrays = obj_arrays(data, resolver.get)
             except ObjUnsupported as e:
-                log.debug("meshes: %s: %s, using trimesh", label, e)
+                log.debug("meshes: %s: %s, using trimesh", shown(label, 400), e)
         if arrays is None:
             try:
                 loaded = trimesh.load(io.BytesIO(data), file_type=ext, force="scene", process=False, resolver=resolver)

@@ -28,6 +28,7 @@ import numpy as np
 import shapely
 
 from ..contracts import AssetRecord, MeshData, SkippedAsset
+from ..errors import shown
 from .catalog import Catalog
 from .importer import ImportReport, Progress, run_import
 from .naming import assign_groups, class_from_name, wall_mount
@@ -334,7 +335,7 @@ def _load_arrays(entry: Sh3dEntry, *, fast: bool = True) -> tuple[np.ndarray, np
         try:
             return obj_arrays(data, resolver.get)
         except ObjUnsupported as e:
-            log.debug("sh3d: %s: %s, using trimesh", entry.label, e)
+            log.debug("sh3d: %s: %s, using trimesh", shown(entry.label, 400), e)
     try:
         loaded = trimesh.load(io.BytesIO(data), file_type="obj", resolver=resolver,
                               force="scene", process=False, group_material=True, skip_materials=False)
@@ -359,7 +360,7 @@ def convert_entry(entry: Sh3dEntry) -> tuple[AssetRecord, MeshData] | SkippedAss
     except (zipfile.BadZipFile, OSError, EOFError, zipfile.LargeZipFile) as e:
         return SkippedAsset(entry.label, f"archive unreadable ({e})")
     except Exception as e:  # a bug or a loader failure on strange data: report it, keep importing
-        log.warning("sh3d: unexpected error on %s", entry.label, exc_info=True)
+        log.warning("sh3d: unexpected error on %s", shown(entry.label, 400), exc_info=True)
         return SkippedAsset(entry.label, f"unexpected error ({type(e).__name__}: {e})")
 
 

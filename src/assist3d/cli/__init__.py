@@ -8,7 +8,7 @@ import sys
 
 import typer
 
-from ..errors import AssistError
+from ..errors import AssistError, inert
 
 app = typer.Typer(
     name="assist3d",
@@ -38,9 +38,17 @@ def setup_logging(level: int = logging.INFO) -> None:
     for h in list(logger.handlers):
         logger.removeHandler(h)
     handler = RichHandler(console=Console(stderr=True), show_path=False, show_time=False, markup=False)
-    handler.setFormatter(logging.Formatter("%(message)s"))
+    handler.setFormatter(_InertFormatter("%(message)s"))
     logger.addHandler(handler)
     logger.propagate = False
+
+
+class _InertFormatter(logging.Formatter):
+    """Log lines with control characters escaped: a message that quotes outside text (a file
+    name, an LLM answer) can never move the cursor, retitle the terminal or fake a line."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        return inert(super().format(record), keep="\n\t")
 
 
 def _register_all() -> None:
@@ -60,12 +68,19 @@ _register_all()
 
 
 def main() -> None:
+    from ..interrupts import Interrupted, exit_on_signals
+
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     try:
-        app()
+        with exit_on_signals():
+            app()
     except AssistError as e:
         logging.getLogger("assist3d").error(str(e))
         sys.exit(2)
+    except Interrupted as e:  # workers stopped, temporary files removed, locks released: say what is done
+        sys.stderr.write(f"assist3d: {inert(str(e))}\n")
+        sys.stderr.flush()
+        sys.exit(e.exit_code)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -17,7 +17,7 @@ from typing import Iterator, List, Optional
 
 import typer
 
-from ..errors import AssetError, ConfigError
+from ..errors import AssetError, ConfigError, shown
 from ..paths import ENV_ASSETS, resolve_library
 
 LIBRARY_HELP = f"Catalog folder (default: ${ENV_ASSETS}, else <cache>/assets)."
@@ -50,7 +50,7 @@ def _progress_bar(label: str, enabled: bool = True) -> Iterator:
         task = bar.add_task(label, total=None, item="")
 
         def update(done: int, total: int, name: str) -> None:
-            bar.update(task, completed=done, total=total, item=name[:40])
+            bar.update(task, completed=done, total=total, item=shown(name, 40, markup=True))
             bar.refresh()
 
         yield update
@@ -69,7 +69,7 @@ def _print_summary(title: str, report_json: dict, catalog, as_json: bool) -> Non
     table.add_column("catalog")
     table.add_column("assets", justify="right")
     for name, n in report_json["added"].items():
-        table.add_row(name, str(n))
+        table.add_row(shown(name, markup=True), str(n))
     table.add_row("[bold]total", f"[bold]{report_json['total']}")
     console.print(table)
     skipped = report_json["skipped"]
@@ -78,9 +78,10 @@ def _print_summary(title: str, report_json: dict, catalog, as_json: bool) -> Non
         sk.add_column("path", overflow="fold")
         sk.add_column("reason", overflow="fold")
         for s in skipped:
-            sk.add_row(s["path"], s["reason"])
+            sk.add_row(shown(s["path"], 400, markup=True), shown(s["reason"], markup=True))
         console.print(sk)
-    console.print(f"{report_json['total']} assets imported in {report_json['seconds']:.1f} s into {catalog.root}; "
+    console.print(f"{report_json['total']} assets imported in {report_json['seconds']:.1f} s into "
+                  f"{shown(catalog.root, 400, markup=True)}; "
                   f"catalog now: {stats['assets']} assets, {stats['classes']} classes, groups {stats['groups']}")
 
 
@@ -157,7 +158,8 @@ def procedural_cmd(
         return
     from rich.console import Console
 
-    Console().print(f"procedural library: {count} assets (seed {seed}) in {root}, {seconds:.1f} s; catalog now "
+    Console().print(f"procedural library: {count} assets (seed {seed}) in {shown(root, 400, markup=True)}, "
+                    f"{seconds:.1f} s; catalog now "
                     f"{stats['assets']} assets, {stats['classes']} classes, groups {stats['groups']}")
 
 
@@ -183,7 +185,7 @@ def stats_cmd(
     from rich.table import Table
 
     console = Console()
-    t = Table(title=f"catalog {root}")
+    t = Table(title=f"catalog {shown(root, 400, markup=True)}")
     t.add_column("what")
     t.add_column("count", justify="right")
     t.add_row("assets", str(stats["assets"]))
@@ -191,18 +193,18 @@ def stats_cmd(
     for g, n in stats["groups"].items():
         t.add_row(f"group {g}", str(n))
     for s, n in stats["sources"].items():
-        t.add_row(f"source {s}", str(n))
+        t.add_row(f"source {shown(s, markup=True)}", str(n))
     t.add_row("skipped", str(len(stats["skipped"])))
     console.print(t)
     top = Counter(per_class).most_common(15)
     if top:
-        console.print("most common classes: " + ", ".join(f"{c} ({n})" for c, n in top))
+        console.print("most common classes: " + ", ".join(f"{shown(c, markup=True)} ({n})" for c, n in top))
     if stats["skipped"]:
         sk = Table(title="skipped")
         sk.add_column("path", overflow="fold")
         sk.add_column("reason", overflow="fold")
         for s in stats["skipped"]:
-            sk.add_row(s["path"], s["reason"])
+            sk.add_row(shown(s["path"], 400, markup=True), shown(s["reason"], markup=True))
         console.print(sk)
 
 
@@ -239,7 +241,8 @@ def list_cmd(
     for col in ("id", "class", "groups", "size w x d x h (m)", "supports", "tris"):
         t.add_column(col, overflow="fold")
     for r in recs:
-        t.add_row(r.id, r.class_name, ",".join(r.groups), " x ".join(f"{s:.2f}" for s in r.size),
+        t.add_row(shown(r.id, markup=True), shown(r.class_name, markup=True), ",".join(r.groups),
+                  " x ".join(f"{s:.2f}" for s in r.size),
                   ",".join(f"{s.height:.2f}" for s in r.supports), str(r.triangles))
     Console().print(t)
 

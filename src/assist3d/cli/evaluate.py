@@ -10,7 +10,7 @@ from typing import Optional
 
 import typer
 
-from ..errors import ConfigError
+from ..errors import ConfigError, shown
 
 
 def register(app: typer.Typer) -> None:
@@ -60,7 +60,7 @@ def evaluate(
     fn = _load_feature(feature) if feature else default_feature
     err = Console(stderr=True)
     with Progress(console=err, transient=True, disable=as_json) as bar:
-        task = bar.add_task(f"evaluating {dataset.name}", total=len(dataset))
+        task = bar.add_task(f"evaluating {shown(dataset.name, markup=True)}", total=len(dataset))
         result = evaluate_dataset(
             dataset, pred, allow_missing=allow_missing, ood_reference=reference, feature=fn,
             progress=lambda i, n: bar.update(task, completed=i), workers=workers,
@@ -73,7 +73,8 @@ def evaluate(
         return "n/a" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{100 * x:.1f}"
 
     out = Console()
-    title = f"Class-agnostic instance segmentation on {dataset.format}:{dataset.root} ({len(dataset)} scenes)"
+    title = (f"Class-agnostic instance segmentation on {dataset.format}:{shown(dataset.root, 400, markup=True)} "
+             f"({len(dataset)} scenes)")
     t = Table(title=title)
     t.add_column("scene" if per_scene else "", justify="left", no_wrap=True)
     for k in METRIC_KEYS:
@@ -82,7 +83,7 @@ def evaluate(
     t.add_column("pred", justify="right")
     if per_scene:
         for sid, m in result.per_scene.items():
-            t.add_row(sid, *(pct(m[k]) for k in METRIC_KEYS), str(m.num_gt), str(m.num_pred))
+            t.add_row(shown(sid, markup=True), *(pct(m[k]) for k in METRIC_KEYS), str(m.num_gt), str(m.num_pred))
         t.add_section()
     o = result.overall
     t.add_row("all (pooled)", *(pct(o[k]) for k in METRIC_KEYS), str(o.num_gt), str(o.num_pred), style="bold")

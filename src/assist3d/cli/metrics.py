@@ -8,6 +8,8 @@ from typing import List, Optional
 
 import typer
 
+from ..errors import shown
+
 
 def register(app: typer.Typer) -> None:
     app.command("metrics")(metrics)
@@ -57,12 +59,12 @@ def metrics(
         t.add_column(col, justify="right" if col != "dataset" else "left")
     fmt = lambda v, p: "n/a" if v is None else f"{v:.{p}f}"  # noqa: E731
     for name, row in table.items():
-        t.add_row(name, str(row["scenes"]), str(row["instances"]), fmt(row["geometry_diversity"], 3),
+        t.add_row(shown(name, markup=True), str(row["scenes"]), str(row["instances"]), fmt(row["geometry_diversity"], 3),
                   fmt(row["context_complexity"], 3), fmt(row["layout_score"], 1))
     Console().print(t)
     for name, row in table.items():
         for k, why in (row.get("notes") or {}).items():
-            Console(stderr=True).print(f"[dim]{name}: {k} n/a: {why}[/dim]")
+            Console(stderr=True).print(f"[dim]{shown(name, markup=True)}: {k} n/a: {shown(why, markup=True)}[/dim]")
 
 
 def cluster_assets_cmd(

@@ -13,7 +13,8 @@ from typing import Optional
 import numpy as np
 import typer
 
-from ..errors import ConfigError, DataError
+from ..errors import ConfigError, DataError, shown
+from ..paths import safe_name
 
 log = logging.getLogger("assist3d.segment")
 
@@ -227,15 +228,16 @@ def segment_cmd(
     n_done = 0
     for scene_id, coord, color, sample in _inputs(input_):
         t0 = time.perf_counter()
+        safe_name(scene_id, what=f"{input_}: scene id")
         coord = np.asarray(coord, np.float32)
         if len(coord) == 0:
-            raise DataError(f"{input_}: scene {scene_id} has no points")
+            raise DataError(f"{input_}: scene {shown(scene_id)} has no points")
         finite = np.all(np.isfinite(coord), axis=1)
         if not finite.all():
             log.warning("%s: %d of %d points have non-finite coordinates; they get no instance",
-                        scene_id, int((~finite).sum()), len(coord))
+                        shown(scene_id), int((~finite).sum()), len(coord))
             if not finite.any():
-                raise DataError(f"{input_}: scene {scene_id}: no point has finite coordinates")
+                raise DataError(f"{input_}: scene {shown(scene_id)}: no point has finite coordinates")
         sub_color = color[finite] if color is not None else None
         if loaded is not None:
             from ..segmenter.infer import segment_points
@@ -267,4 +269,5 @@ def segment_cmd(
             typer.echo(json.dumps(row))
         else:
             extra = "".join(f"  {k} {row[k]:.3f}" for k in ("AP", "AP50", "AP25") if k in row)
-            typer.echo(f"{scene_id}: {row['instances']} instances in {row['seconds']:.1f} s{extra} -> {out}/{scene_id}.npz, .ply")
+            typer.echo(f"{shown(scene_id)}: {row['instances']} instances in {row['seconds']:.1f} s{extra} -> "
+                       f"{shown(out / scene_id, 400)}.npz, .ply")

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, shown
 
 log = logging.getLogger(__name__)
 
@@ -126,9 +126,9 @@ def _parse_header(path: Path, raw: bytes) -> tuple[str, list[_Element], int]:
                 else:
                     props.append(_Property(tok[2], _TYPES[tok[1]]))
             else:
-                raise DataError(f"{path}: PLY header line {line_no}: unknown keyword {tok[0]!r}")
+                raise DataError(f"{path}: PLY header line {line_no}: unknown keyword '{shown(tok[0])}'")
         except (IndexError, KeyError, ValueError) as e:
-            raise DataError(f"{path}: PLY header line {line_no} is malformed: {line!r} ({e})") from None
+            raise DataError(f"{path}: PLY header line {line_no} is malformed: '{shown(line)}' ({shown(e)})") from None
     if name:
         elements.append(_Element(name, count, tuple(props)))
     if fmt not in ("binary_little_endian", "binary_big_endian", "ascii"):

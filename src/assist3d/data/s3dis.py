@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from ..contracts import PointSample
-from ..errors import ConfigError, DataError
+from ..errors import ConfigError, DataError, shown
 from ..fileio import write_bytes_atomic
 from ..paths import cache_root
 from .base import SceneDataset
@@ -84,7 +84,7 @@ def read_s3dis_txt(path: Path) -> np.ndarray:
             warnings.simplefilter("ignore")
             arr = np.loadtxt(io.BytesIO(raw), dtype=np.float32, ndmin=2)
     except ValueError as e:
-        raise DataError(f"{path}: malformed S3DIS annotation file ({e})") from None
+        raise DataError(f"{path}: malformed S3DIS annotation file ({shown(e)})") from None
     if arr.shape[1] != 6:
         raise DataError(f"{path}: expected 6 columns (x y z r g b), found {arr.shape[1]}")
     return arr
@@ -138,7 +138,7 @@ class S3DISDataset(SceneDataset):
             if cls == "stairs":
                 cls = "clutter"
             if cls not in S3DIS_CLASSES:
-                raise DataError(f"{f}: unknown S3DIS class {m['cls']!r} (expected one of {', '.join(S3DIS_CLASSES)})")
+                raise DataError(f"{f}: unknown S3DIS class '{shown(m['cls'])}' (expected one of {', '.join(S3DIS_CLASSES)})")
             files.append((S3DIS_CLASSES.index(cls), int(m["k"]), m["cls"].lower(), f))
         if not files:
             raise DataError(f"{anno}: no <class>_<k>.txt annotation files")

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..contracts import PointSample
-from ..errors import DataError
+from ..errors import DataError, shown
 from .base import SceneDataset, instances_from_groups, read_json, require_key
 from .ply import read_scan_mesh
 
@@ -47,7 +47,7 @@ def read_label_map(path: Path) -> dict[str, int]:
         raise DataError(f"{path}: empty label map")
     header = rows[0]
     if "raw_category" not in header or "nyu40id" not in header:
-        raise DataError(f"{path}: label map header lacks 'raw_category' or 'nyu40id' columns (has {header[:6]})")
+        raise DataError(f"{path}: label map header lacks 'raw_category' or 'nyu40id' columns (has {shown(header[:6])})")
     ci, ni = header.index("raw_category"), header.index("nyu40id")
     out: dict[str, int] = {}
     for line_no, row in enumerate(rows[1:], start=2):
@@ -56,7 +56,7 @@ def read_label_map(path: Path) -> dict[str, int]:
         try:
             out[row[ci]] = int(row[ni])
         except ValueError:
-            raise DataError(f"{path}: line {line_no}: nyu40id {row[ni]!r} is not an integer") from None
+            raise DataError(f"{path}: line {line_no}: nyu40id '{shown(row[ni])}' is not an integer") from None
     return out
 
 
@@ -127,7 +127,7 @@ class ScanNetDataset(SceneDataset):
                 nyu = 0
             groups.append((segments, nyu in SCANNET18_NYU40, nyu_to_20.get(nyu, -1)))
         if unknown:
-            log.warning("%s: labels not in the label map (treated as void): %s", agg_path, sorted(unknown))
+            log.warning("%s: labels not in the label map (treated as void): %s", agg_path, shown(sorted(unknown), 400))
         instance, segment = instances_from_groups(agg_path, seg, groups)
         return PointSample(
             scene_id=scene_id, coord=coord, color=color, normal=normal,

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..contracts import PointSample
-from ..errors import DataError
+from ..errors import DataError, shown
 from .base import SceneDataset, instances_from_groups, read_json, require_key
 from .ply import read_scan_mesh
 
@@ -91,7 +91,7 @@ def _read_mask(path: Path, n: int) -> np.ndarray:
     try:
         idx = np.array(text, dtype=np.int64) if text else np.zeros(0, np.int64)
     except ValueError as e:
-        raise DataError(f"{path}: ignore mask holds a non-integer entry ({e})") from None
+        raise DataError(f"{path}: ignore mask holds a non-integer entry ({shown(e)})") from None
     if idx.size and (idx.min() < 0 or idx.max() >= n):
         raise DataError(f"{path}: ignore mask index out of range 0..{n - 1} (min {idx.min()}, max {idx.max()})")
     return idx

@@ -20,7 +20,9 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ..contracts import PointSample
+from ..errors import shown
 from ..fileio import write_npz_atomic
+from ..paths import safe_name
 from .config import PredictConfig, TrainConfig
 from .train import build_model, config_from_checkpoint, load_checkpoint, resolve_device
 from .voxelize import collate, voxelize
@@ -131,12 +133,13 @@ def predict_dataset(checkpoint: str | Path, spec: str, out_dir: str | Path, *, d
     out = Path(out_dir)
     written = []
     for i, scene_id in enumerate(ds.scene_ids):
+        safe_name(scene_id, what=f"{spec}: scene id")
         sample = ds.load(scene_id)
         pred = predict_scene(model, sample, cfg.data.voxel_size, pcfg, dev)
         path = out / f"{scene_id}.npz"
         write_npz_atomic(path, masks=pred.masks, scores=pred.scores)
         written.append(path)
-        log.info("%s: %d masks over %d points", scene_id, len(pred.scores), len(sample))
+        log.info("%s: %d masks over %d points", shown(scene_id), len(pred.scores), len(sample))
         if on_scene is not None:
             on_scene(scene_id, i + 1, len(ds.scene_ids))
     return written

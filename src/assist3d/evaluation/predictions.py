@@ -6,7 +6,8 @@ of the dataset reader's scene.
 
 The benchmark text format is one ``<scene_id>.txt`` per scene with lines
 ``pred_mask/<scene_id>_<k>.txt <label_id> <score>`` and, per mask, a file holding one ``0``/``1``
-per point (paths relative to the ``.txt``). Class-agnostic evaluation treats every mask as an
+per point (paths relative to the ``.txt``; a path that is absolute or resolves outside the
+``.txt``'s folder is refused before it is read). Class-agnostic evaluation treats every mask as an
 object whatever its label id.
 """
 
@@ -18,8 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, shown
 from ..fileio import write_bytes_atomic, write_text_atomic
+from ..paths import inside, safe_name
 
 log = logging.getLogger(__name__)
 
@@ -74,6 +76,7 @@ def _mask_bytes(mask: np.ndarray) -> bytes:
 def export_scannet_txt(out_dir: str | Path, scene_id: str, masks: np.ndarray, scores: np.ndarray, *, label_id: int = 1) -> Path:
     """Write one scene in the benchmark text format under ``out_dir``; returns the ``.txt`` path."""
     out_dir = Path(out_dir)
+    safe_name(scene_id, what=f"{out_dir}: scene id")
     txt = out_dir / f"{scene_id}.txt"
     masks, scores = _validated(txt, masks, scores, None)
     lines = []
@@ -110,6 +113,8 @@ def import_scannet_txt(path: str | Path, n_points: int | None = None) -> tuple[n
         lines = path.read_text(encoding="utf-8").splitlines()
     except OSError as e:
         raise DataError(f"{path}: cannot read ({e.strerror or e})") from None
+    except UnicodeDecodeError as e:
+        raise DataError(f"{path}: not UTF-8 text (byte {e.start}); expected benchmark prediction lines") from None
     masks: list[np.ndarray] = []
     scores: list[float] = []
     for line_no, line in enumerate(lines, start=1):
@@ -117,15 +122,16 @@ def import_scannet_txt(path: str | Path, n_points: int | None = None) -> tuple[n
         if not tok:
             continue
         if len(tok) != 3:
-            raise DataError(f"{path}: line {line_no}: expected '<mask file> <label id> <score>', got {line!r}")
+            raise DataError(f"{path}: line {line_no}: expected '<mask file> <label id> <score>', got '{shown(line)}'")
         try:
             int(tok[1])
             scores.append(float(tok[2]))
         except ValueError:
-            raise DataError(f"{path}: line {line_no}: label id or score is not a number: {line!r}") from None
-        mask = _read_mask_file(path.parent / tok[0], n_points)
+            raise DataError(f"{path}: line {line_no}: label id or score is not a number: '{shown(line)}'") from None
+        mask_path = inside(path.parent, tok[0], what=f"{path}: line {line_no}")
+        mask = _read_mask_file(mask_path, n_points)
         if masks and len(mask) != len(masks[0]):
-            raise DataError(f"{path.parent / tok[0]}: {len(mask)} lines, earlier masks have {len(masks[0])}")
+            raise DataError(f"{mask_path}: {len(mask)} lines, earlier masks have {len(masks[0])}")
         masks.append(mask)
     if not masks:
         return np.zeros((0, n_points or 0), bool), np.zeros(0, np.float32)

@@ -22,6 +22,7 @@ import numpy as np
 from ..contracts import PointSample, SceneLayout
 from ..errors import DataError
 from ..fileio import write_bytes_atomic, write_json_atomic
+from ..paths import inside
 from .ply import ply_bytes
 
 log = logging.getLogger(__name__)
@@ -112,11 +113,11 @@ def read_scene_meta(scene_dir: str | Path, *, check_files: bool = True) -> dict 
         return None
     if check_files:
         for name, info in meta["files"].items():
-            p = d / name
             try:
+                p = inside(d, name, what=f"{d / META_NAME}: files")  # a listed file outside the folder: tampered
                 if p.stat().st_size != info["bytes"] or file_digest(p.read_bytes()) != info["blake2b"]:
                     return None
-            except (OSError, KeyError, TypeError):
+            except (OSError, KeyError, TypeError, DataError):
                 return None
     return meta
 

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 from typing import Any, Iterator
 
 from ..config import LLMConfig
-from ..errors import ConfigError, LLMError
+from ..errors import ConfigError, LLMError, shown
 from ..rng import stable_hash
 from .cache import CachedAnswer, ResponseCache, cache_key
 
@@ -258,9 +258,10 @@ class ChatClient:
                 attempt += 1
 
     def _snippet(self, data: bytes) -> str:
+        """The start of an answer body for a message: the key masked, controls escaped, cut short."""
         text = data[:300].decode("utf-8", "replace").replace("\n", " ").strip()
         secret = self._api_key()
-        return text.replace(secret, "***") if secret else text
+        return shown(text.replace(secret, "***") if secret else text)
 
     def _parse(self, data: bytes) -> ChatAnswer:
         try:

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..config import LLMConfig
 from ..contracts import Relation, Room
-from ..errors import ConfigError, LLMError
+from ..errors import ConfigError, LLMError, inert
 from ..scene.relations import CROSS_GROUP, GroupPlan, PlannedObject, Planner, PlanRequest, validate_plan
 from ..scene.roomtypes import RoomTemplate
 from .cache import ResponseCache
@@ -69,7 +69,7 @@ class LLMPlanner:
             if problems:
                 repairs = 1
                 log.info("%s %s: %d problem(s) in the answer; asking for a repair: %s", self.name,
-                         request.group, len(problems), "; ".join(problems[:5]))
+                         request.group, len(problems), inert("; ".join(problems[:5])))
                 repair_messages = messages + [
                     {"role": "assistant", "content": first.content},
                     {"role": "user", "content": render_repair_message(problems, self.cfg.prompt_dir)},
@@ -85,7 +85,7 @@ class LLMPlanner:
                     checked, problems = checked2, problems2
                 elif checked is not None:
                     kept = f"repair answer unusable ({'; '.join(problems2[:2])}); kept the first answer"
-                    log.warning("%s %s: %s", self.name, request.group, kept)
+                    log.warning("%s %s: %s", self.name, request.group, inert(kept))
                     extra_notes.append(kept)
             if checked is None:
                 raise LLMError(f"no usable answer after one repair round ({'; '.join(problems[:3])})")
@@ -93,13 +93,13 @@ class LLMPlanner:
                 raise LLMError("the answer lists none of the objects")
         except LLMError as e:
             reason = f"LLM failed for group {request.group}: {e}; the rule planner took over"
-            log.warning("%s", reason)
+            log.warning("%s", inert(reason))
             plan = self.fallback.plan(request, rng=rng)
             return self._with_stats(plan, usage, repairs, (reason, *plan.notes), t0)
 
         notes = extra_notes + [f"dropped: {p}" for p in problems if not p.startswith("objects never listed")]
         for n in notes:
-            log.info("%s %s: %s", self.name, request.group, n)
+            log.info("%s %s: %s", self.name, request.group, inert(n))
         order = list(checked.order)
         if checked.missing:
             order, extra = _append_missing(order, checked.missing, request, self.fallback, rng)
@@ -108,7 +108,7 @@ class LLMPlanner:
         bad = validate_plan(plan, request)
         if bad:  # cannot happen with a checked answer; keep the guarantee anyway
             reason = f"LLM plan for group {request.group} failed validation ({'; '.join(bad[:3])}); rules took over"
-            log.error("%s", reason)
+            log.error("%s", inert(reason))
             fb = self.fallback.plan(request, rng=rng)
             return self._with_stats(fb, usage, repairs, (reason, *fb.notes), t0)
         return self._with_stats(plan, usage, repairs, plan.notes, t0)
@@ -133,7 +133,7 @@ class LLMPlanner:
                 raise LLMError("; ".join(problems[-3:]))
         except LLMError as e:
             notes.append(f"LLM room objects failed for a {room_type} ({e}); the built-in template was used")
-            log.warning("%s: %s", self.name, notes[-1])
+            log.warning("%s: %s", self.name, inert(notes[-1]))
         stats: dict[str, Any] = usage.as_dict()
         stats["llm_seconds"] = round(usage.seconds, 4)
         stats["seconds"] = round(time.monotonic() - t0, 4)

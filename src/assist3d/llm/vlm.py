@@ -25,7 +25,7 @@ import numpy as np
 
 from ..config import LLMConfig
 from ..contracts import Room
-from ..errors import ConfigError, DataError, LLMError
+from ..errors import ConfigError, DataError, LLMError, inert, shown
 from .cache import ResponseCache
 from .client import ChatClient, Usage
 from .prompts import describe_room, load_template, render_repair_message
@@ -103,7 +103,7 @@ def score_layout(images: list[bytes], cfg: LLMConfig, *, room: str = "",
             if problem is not None:
                 raise LLMError(f"no usable score after one repair round: {problem}")
     except LLMError as e:
-        log.warning("VLM layout score failed: %s", e)
+        log.warning("VLM layout score failed: %s", inert(e))
         details["error"] = str(e)
         score = None
     details.update(usage.as_dict())
@@ -141,7 +141,8 @@ def vlm_layout_score(scene_dir: Path, cfg: LLMConfig, *, n_views: int = 4, size:
     coord, color = load_scene_points(Path(scene_dir))
     images = render_point_views(coord, color, n=n_views, size=size)
     score, details = score_layout(images, cfg, room=_room_text(Path(scene_dir) / "layout.json"))
-    log.info("%s: VLM layout score %s (%s)", scene_dir, score, details.get("reason") or details.get("error", ""))
+    log.info("%s: VLM layout score %s (%s)", shown(scene_dir, 400), score,
+             shown(details.get("reason") or details.get("error", "")))
     return score
 
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..assets.catalog import Catalog
 from ..contracts import SceneLayout
+from ..errors import shown
 from ..fileio import write_bytes_atomic
 from .room import opening_segment
 
@@ -70,7 +71,7 @@ def render_topdown(layout: SceneLayout, catalog: Catalog, path: str | Path, *, t
         else:
             size = UNKNOWN_SIZE
             log.warning("topdown: asset %s of instance %d is not in catalog %s; drawn as a 0.2 m square",
-                        inst.asset, inst.id, catalog.root)
+                        shown(inst.asset), inst.id, catalog.root)
         pose = np.asarray(inst.pose, dtype=np.float64)
         corners = footprint_corners(pose, size)
         ax.add_patch(Polygon(corners, closed=True, facecolor=face, edgecolor=edge, linewidth=0.8, alpha=0.85,
