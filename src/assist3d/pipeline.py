@@ -11,8 +11,9 @@ import logging
 import multiprocessing as mp
 import os
 import re
+import shutil
 import time
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import dataclass
 from pathlib import Path
 from contextlib import contextmanager
@@ -24,6 +25,7 @@ from .config import GenerateConfig, config_to_dict, dump_config
 from .errors import AssistError, ConfigError
 from .export import Manifest, read_scene_meta, write_scene
 from .export.writer import remove_stale_temps
+from .interrupts import Interrupted, worker_pool
 from .rng import make_rng, scene_seed
 
 log = logging.getLogger(__name__)
@@ -164,22 +166,47 @@ class DatasetRun:
     errors: list[str]  # scenes that raised an AssistError (not written; a re-run retries them)
 
 
+LOCK_NAME = ".generate.lock"
+
+
 @contextmanager
 def _folder_lock(out: Path) -> Iterator[None]:
-    """Hold an exclusive lock on ``out`` (released by the OS even on SIGKILL)."""
+    """Hold an exclusive lock on ``out`` (released by the OS even on SIGKILL); the lock file is
+    removed when the run ends."""
+    import fcntl
+
+    path = out / LOCK_NAME
+    fd = _lock_file(path)
+    try:
+        yield
+    finally:
+        try:
+            path.unlink(missing_ok=True)  # while still held: a run that opened it retries on a new file
+        except OSError:  # a folder made read-only meanwhile: the unlocked file is harmless
+            pass
+        fcntl.flock(fd, fcntl.LOCK_UN)
+        os.close(fd)
+
+
+def _lock_file(path: Path) -> int:
+    """Open and lock ``path``; retried if a finishing run removed the file we locked."""
     import fcntl
 
     from .errors import DataError
 
-    with open(out / ".generate.lock", "a+b") as f:
+    while True:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
         try:
-            fcntl.flock(f.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
-            raise DataError(f"{out}: another `assist3d generate` is writing this folder") from None
+            os.close(fd)
+            raise DataError(f"{path.parent}: another `assist3d generate` is writing this folder") from None
         try:
-            yield
-        finally:
-            fcntl.flock(f.fileno(), fcntl.LOCK_UN)
+            if os.path.samestat(os.fstat(fd), os.stat(path)):
+                return fd
+        except FileNotFoundError:
+            pass
+        os.close(fd)
 
 
 def _existing_scenes(out: Path) -> list[int]:
@@ -197,7 +224,22 @@ def generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int
     ``on_start(total, already_done)`` is called once, ``on_scene(meta, skipped)`` after every
     scene. The resolved config is saved as ``out/config.yaml``, the manifest as
     ``out/manifest.json`` (rewritten as scenes finish).
+
+    On :class:`~assist3d.interrupts.Interrupted` (SIGINT / SIGTERM under the command line) the
+    workers are stopped, half-written scene folders and temporary files removed, the folder lock
+    released, and the exception re-raised with a detail saying how many scenes are complete.
     """
+    indices = list(indices)
+    try:
+        return _generate_dataset(cfg, out, indices, workers=workers, verify=verify, on_scene=on_scene,
+                                 on_start=on_start)
+    except Interrupted as e:
+        raise Interrupted(e.signum, _progress_line(Path(out), indices, cfg.seed)) from None
+
+
+def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int], *, workers: int,
+                      verify: bool, on_scene: Callable[[dict, bool], None] | None,
+                      on_start: Callable[[int, int], None] | None) -> DatasetRun:
     if workers < 1:
         raise ConfigError(f"--workers must be >= 1, got {workers}")
     out = Path(out)
@@ -275,28 +317,63 @@ def generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int
             errors.append(scene_name(index))
 
         jobs = [SceneJob(i, str(out), verify) for i in todo]
-        if gen is not None:
-            for job in jobs:
-                try:
-                    meta = gen.scene(job)
-                except AssistError as e:
-                    fail(job.index, e)
-                    continue
-                done(meta)
-        elif jobs:
-            ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn")
-            with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=ctx, initializer=_init_worker,
-                                     initargs=(cfg_dict, threads)) as pool:
-                futures = {pool.submit(_run_job, j): j.index for j in jobs}
-                pending = set(futures)
-                while pending:
-                    finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                    for f in finished:
-                        if f.exception() is not None:
-                            fail(futures[f], f.exception())
-                        else:
-                            done(f.result())
+        try:
+            if gen is not None:
+                _run_in_process(gen, jobs, done, fail)
+            elif jobs:
+                _run_in_pool(jobs, workers, cfg_dict, threads, done, fail)
+        except Interrupted:
+            _discard_unfinished(out, todo)
+            raise
         return DatasetRun(out, indices, skipped, generated, manifest, failed, errors)
+
+
+def _run_in_process(gen: Generator, jobs: list[SceneJob], done: Callable[[dict], None],
+                    fail: Callable[[int, BaseException], None]) -> None:
+    for job in jobs:
+        try:
+            meta = gen.scene(job)
+        except AssistError as e:
+            fail(job.index, e)
+            continue
+        done(meta)
+
+
+def _run_in_pool(jobs: list[SceneJob], workers: int, cfg_dict: dict, threads: int, done: Callable[[dict], None],
+                 fail: Callable[[int, BaseException], None]) -> None:
+    """Scenes in worker processes (stopped at once if this process is interrupted)."""
+    ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn")
+    with worker_pool(min(workers, len(jobs)), mp_context=ctx, initializer=_init_worker,
+                     initargs=(cfg_dict, threads)) as pool:
+        futures = {pool.submit(_run_job, j): j.index for j in jobs}
+        pending = set(futures)
+        while pending:
+            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for f in finished:
+                if f.exception() is not None:
+                    fail(futures[f], f.exception())
+                else:
+                    done(f.result())
+
+
+def _discard_unfinished(out: Path, indices: Iterable[int]) -> None:
+    """After an interrupt: remove the half-written folders of scenes ``indices`` (no completion
+    marker) and temporary files in ``out``; complete scenes stay."""
+    for i in indices:
+        d = out / scene_name(i)
+        if d.is_dir() and read_scene_meta(d, check_files=False) is None:
+            shutil.rmtree(d, ignore_errors=True)
+    remove_stale_temps(out)
+
+
+def _progress_line(out: Path, indices: list[int], seed: int) -> str:
+    """``"3 of 20 scenes complete in OUT; re-run the same command to resume"``, read from disk."""
+    wanted = {int(i) for i in indices}
+    complete = 0
+    for i in wanted:
+        meta = read_scene_meta(out / scene_name(i), check_files=False)
+        complete += meta is not None and meta.get("seed") == scene_seed(seed, i)
+    return f"{complete} of {len(wanted)} scenes complete in {out}; re-run the same command to resume"
 
 
 def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, out: str | None = None,

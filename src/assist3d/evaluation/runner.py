@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import logging
 import math
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
@@ -13,6 +12,7 @@ import numpy as np
 
 from ..data.base import SceneDataset
 from ..errors import DataError
+from ..interrupts import worker_pool
 from .ap import ALL_THRESHOLDS, METRIC_KEYS, Metrics, SceneMatches, match_scene, recall_on, summarize
 from .ood import FeatureFn, dataset_features, default_feature, instance_features, ood_threshold
 from .predictions import import_scannet_txt, load_predictions
@@ -149,7 +149,7 @@ def evaluate_dataset(
         for i, job in enumerate(jobs):
             collect(i, *_score_scene(job))
     else:
-        with ProcessPoolExecutor(max_workers=min(workers, len(jobs))) as pool:
+        with worker_pool(min(workers, len(jobs))) as pool:  # stopped at once on an interrupt
             for i, (m, chosen) in enumerate(pool.map(_score_scene, jobs)):
                 collect(i, m, chosen)
     overall = summarize(matches)

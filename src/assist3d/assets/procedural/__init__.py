@@ -22,7 +22,7 @@ from __future__ import annotations
 import logging
 import time
 from collections import deque
-from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Iterable
 
@@ -30,6 +30,7 @@ import numpy as np
 
 from ...contracts import AssetRecord, MeshData, SupportSurface
 from ...errors import AssetError
+from ...interrupts import worker_pool
 from ..catalog import Catalog
 from . import (abstract, appliances, household, seating, small_extra, small_home, small_misc,  # noqa: F401
                storage, tables, wall, wall_extra)  # importing a module registers its families
@@ -197,7 +198,7 @@ def build_library(root: str | Path, *, count: int, seed: int, workers: int = 1) 
         step = max(1, min(64, count // (workers * 4) or 1))
         chunks = [(seed, list(range(a, min(count, a + step)))) for a in range(0, count, step)]
         # the process pool forks its workers (on map) before any writer thread exists
-        with ProcessPoolExecutor(max_workers=workers) as pool:
+        with worker_pool(workers) as pool:  # stopped at once on an interrupt
             _write_all(catalog, (item for chunk in pool.map(_build_chunk, chunks) for item in chunk))
     catalog.save()
     kept = {r.mesh_file for r in catalog.records}
