@@ -8,7 +8,7 @@ OUT    ?= demo_out
 
 help:
 	@echo "make demo   - set up and generate a small dataset from the built-in assets, then picture it"
-	@echo "make test   - set up (with the training and LLM extras) and run the test suite"
+	@echo "make test   - set up (with the training, LLM and sim extras) and run the test suite"
 	@echo "make bench  - time the generator at paper settings"
 
 $(BIN)/activate:
@@ -21,7 +21,7 @@ $(VENV)/.core: pyproject.toml | $(BIN)/activate
 
 $(VENV)/.full: pyproject.toml | $(BIN)/activate
 	$(BIN)/pip install -q "torch==2.13.0"
-	$(BIN)/pip install -q -e ".[dev,train,llm]"
+	$(BIN)/pip install -q -e ".[dev,train,llm,sim]"
 	touch $@ $(VENV)/.core
 
 setup: $(VENV)/.core

@@ -2,7 +2,8 @@
 
 Facade: :func:`build_point_cloud` turns an assembled scene into a labelled point cloud by
 picking vantage points, ray-casting RGB-D views and fusing them (or, for the ablation baseline,
-by uniform surface sampling at matching density). :func:`render_point_cloud` returns the same
+by uniform surface sampling at matching density, or, ScanNet-like, by TSDF fusion of the same views
+and marching cubes, see :mod:`.tsdf`). :func:`render_point_cloud` returns the same
 cloud with the vantage points and per-instance visibility that :func:`verify_labels` checks.
 """
 
@@ -22,6 +23,7 @@ from .meshsample import nearest_instance, sample_surface
 from .raycast import BACKENDS, RayCaster, make_caster
 from .rgbd import face_normals, oriented_normals, render_view, shade
 from .sensor import view_gains
+from .tsdf import TsdfIntegrator, require_marching_cubes, tsdf_cloud
 from .vantage import select_vantage_points
 from .verify import LabelCheck, verify_labels
 
@@ -65,19 +67,30 @@ def render_point_cloud(scene: SceneMesh, room: Room, cfg: RenderConfig, *, rng: 
     if caster is None:
         caster = make_caster(cfg.backend, scene.vertices, scene.faces)
     t_bvh = time.perf_counter() - t0
-    hits: FusedHits = cast_and_fuse(scene, caster, cameras, cfg, rng=rng_fuse)
+    integrator = marching_cubes = None
+    if cfg.point_source == "tsdf":
+        marching_cubes = require_marching_cubes()  # fail before the expensive part
+        if cameras:
+            integrator = TsdfIntegrator(scene, cameras[0], cfg, salt=int(rng_mesh.integers(1, 2**62)))
+    hits: FusedHits = cast_and_fuse(scene, caster, cameras, cfg, rng=rng_fuse, sink=integrator)
     t1 = time.perf_counter()
     rendered_points = len(hits.coord)
+    extra: dict = {}
     if cfg.point_source == "mesh":
         coord, face = sample_surface(scene, scene_grid(scene, cfg.voxel_size), rendered_points, rng=rng_mesh)
         normal = face_normals(scene, face)
         color = shade(scene.face_colors[face], np.ones(len(face), np.float32), False)
     else:
-        coord, face = hits.coord, hits.face
-        centers_per_view = np.asarray([c.pose[:3, 3] for c in cameras], dtype=np.float32)
-        normal, cos = oriented_normals(face_normals(scene, face), coord - centers_per_view[hits.view])
+        coord, face, view = hits.coord, hits.face, hits.view
+        if integrator is not None and marching_cubes is not None:
+            cloud = tsdf_cloud(scene, integrator, cfg, marching_cubes, salt=int(rng_mesh.integers(1, 2**62)))
+            coord, face, view, extra = cloud.coord, cloud.face, cloud.view, cloud.stats
+        elif cfg.point_source == "tsdf":  # no cameras: nothing seen
+            coord, face, view = coord[:0], face[:0], view[:0]
+        centers_per_view = np.asarray([c.pose[:3, 3] for c in cameras], dtype=np.float32).reshape(-1, 3)
+        normal, cos = oriented_normals(face_normals(scene, face), coord - centers_per_view[view])
         gains = view_gains(len(cameras), cfg, rng=rng_attr)
-        color = shade(scene.face_colors[face], cos, cfg.shading, None if gains is None else gains[hits.view])
+        color = shade(scene.face_colors[face], cos, cfg.shading, None if gains is None else gains[view])
     if cfg.labels == "nearest":
         instance = nearest_instance(scene, coord, radius=cfg.nearest_radius, spacing=cfg.voxel_size / 2,
                                     rng=rng_attr)
@@ -92,7 +105,7 @@ def render_point_cloud(scene: SceneMesh, room: Room, cfg: RenderConfig, *, rng: 
     timings = {"render": round(t_bvh + hits.seconds_cast, 4), "fuse": round(hits.seconds_merge + (t2 - t1), 4)}
     stats = {"views": len(cameras), "vantage_points": len(centers), "rays": len(cameras) * cfg.width * cfg.height,
              "raw_hits": hits.raw_hits, "rendered_points": rendered_points, "points": len(sample),
-             "point_source": cfg.point_source, "labels": cfg.labels, "backend": cfg.backend}
+             "point_source": cfg.point_source, "labels": cfg.labels, "backend": cfg.backend, **extra}
     log.debug("render %s: %s", scene_id, stats)
     return RenderResult(sample, centers, hits.pixel_counts, timings, stats)
 

@@ -10,8 +10,11 @@ from __future__ import annotations
 
 import logging
 import time
-from concurrent.futures import ThreadPoolExecutor
+from collections import deque
+from collections.abc import Callable, Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -25,7 +28,21 @@ from .voxel import VoxelGrid, pick_one_per_voxel, pick_one_per_voxel_scan
 
 log = logging.getLogger(__name__)
 
-__all__ = ["FusedHits", "cast_and_fuse", "scene_grid"]
+__all__ = ["FusedHits", "ViewSink", "cast_and_fuse", "scene_grid"]
+
+
+class ViewSink(Protocol):
+    """Extra per-view work riding on :func:`cast_and_fuse`'s ray casting (e.g. TSDF integration).
+
+    ``view`` runs in the worker thread that cast view ``index``: t (H*W,) float32 depth (inf =
+    miss), face (H*W,) int32 (-1 = miss), dirs (H*W, 3) float32 world ray directions (camera
+    z = 1), after the depth-sensor options. ``add`` then receives its result in the calling
+    thread, view by view in view order, whatever the thread count.
+    """
+
+    def view(self, index: int, camera: Camera, t: np.ndarray, face: np.ndarray, dirs: np.ndarray) -> Any: ...
+
+    def add(self, index: int, part: Any) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -51,12 +68,27 @@ def scene_grid(scene: SceneMesh, voxel_size: float) -> VoxelGrid:
     return VoxelGrid.around(scene.vertices.min(axis=0), scene.vertices.max(axis=0), voxel_size)
 
 
+def _ordered_map(pool: ThreadPoolExecutor | None, fn: Callable[[int], Any], n: int, window: int) -> Iterator[Any]:
+    """``fn(0), ..., fn(n - 1)`` in order, at most ``window`` of them pending at once (so results
+    a slow consumer has not taken yet do not pile up); serial without a pool."""
+    if pool is None:
+        yield from (fn(i) for i in range(n))
+        return
+    pending: deque[Future] = deque()
+    nxt = 0
+    while nxt < n or pending:
+        while nxt < n and len(pending) < window:
+            pending.append(pool.submit(fn, nxt))
+            nxt += 1
+        yield pending.popleft().result()
+
+
 def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cfg: RenderConfig, *,
-                  rng: np.random.Generator) -> FusedHits:
+                  rng: np.random.Generator, sink: ViewSink | None = None) -> FusedHits:
     """Cast every camera's rays (``cfg.threads`` threads), de-duplicate per view, then merge.
 
     All cameras must share one intrinsics. Deterministic for a generator state, whatever the
-    thread count.
+    thread count. ``sink`` (optional) sees every view's depth as well (see :class:`ViewSink`).
     """
     if not cameras:
         return FusedHits(np.zeros((0, 3), np.float32), np.zeros(0, np.int32), np.zeros(0, np.int32),
@@ -70,7 +102,7 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
     sensor_seeds = rng.integers(0, 2**63, size=len(cameras))
     realism = sensor_enabled(cfg)
 
-    def one_view(i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    def one_view(i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, Any]:
         cam = cameras[i]
         dirs = rotate_directions(cam_dirs, cam.pose)
         center = cam.pose[:3, 3].astype(np.float32)
@@ -81,6 +113,7 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
         if realism:
             t, face = apply_depth_sensor(scene, t, face, dirs, cam.width, cam.height, cfg,
                                          rng=np.random.default_rng(int(sensor_seeds[i])))
+        extra = None if sink is None else sink.view(i, cam, t, face, dirs)
         pix = np.flatnonzero(face >= 0)
         fh = face[pix]
         counts = np.bincount(inst_shift[fh], minlength=n_ids)
@@ -93,15 +126,23 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
             pts[:, j] = col
         keys = grid.keys(pts)
         keep = pick_one_per_voxel_scan(keys, int(salts[i]))
-        return keys[keep], pts[keep], fh[keep], counts, len(pix)
+        return keys[keep], pts[keep], fh[keep], counts, len(pix), extra
+
+    def run(pool: ThreadPoolExecutor | None) -> list[tuple]:
+        out = []
+        for i, part in enumerate(_ordered_map(pool, one_view, len(cameras), 2 * cfg.threads)):
+            if sink is not None:
+                sink.add(i, part[5])
+            out.append(part[:5])
+        return out
 
     t0 = time.perf_counter()
     with threadpool_limits(limits=1):
         if cfg.threads > 1 and len(cameras) > 1:
             with ThreadPoolExecutor(max_workers=cfg.threads, thread_name_prefix="raycast") as pool:
-                parts = list(pool.map(one_view, range(len(cameras))))
+                parts = run(pool)
         else:
-            parts = [one_view(i) for i in range(len(cameras))]
+            parts = run(None)
     t1 = time.perf_counter()
     keys = np.concatenate([p[0] for p in parts])
     coord = np.concatenate([p[1] for p in parts])

@@ -57,6 +57,19 @@ class VoxelGrid:
             key += ij
         return key
 
+    def indices(self, keys: np.ndarray) -> np.ndarray:
+        """(N, 3) int64 voxel indices (from ``lo``) of linear keys (N,) int64; inverse of :meth:`keys`."""
+        out = np.zeros((len(keys), 3), np.int64)
+        rest = np.asarray(keys, np.int64)
+        for j in (2, 1):
+            rest, out[:, j] = np.divmod(rest, self.dims[j])
+        out[:, 0] = rest
+        return out
+
+    def centers(self, keys: np.ndarray) -> np.ndarray:
+        """(N, 3) float64 world centres of the voxels with linear keys (N,) int64."""
+        return (self.indices(keys) + self.lo) * self.size
+
 
 def _mix(keys: np.ndarray, salt: int) -> np.ndarray:
     """(N,) uint64 well-mixed hash of int64 keys and a salt (splitmix64 finaliser)."""
