@@ -96,3 +96,18 @@ def test_manifest_refuses_to_mix_settings(tmp_path):
         Manifest(tmp_path, {"render": {"voxel_size": 0.05}}, 0, ("chair",), "proc").check_compatible()
     with pytest.raises(DataError, match="seed"):
         Manifest(tmp_path, {"render": {"voxel_size": 0.02}}, 1, ("chair",), "proc").check_compatible()
+
+
+def test_manifest_of_an_older_version_stays_resumable(tmp_path):
+    """A dataset written before an option existed was made with that option's default: resuming it
+    with the default is allowed, with another value it is refused."""
+    from assist3d.config import GenerateConfig, config_to_dict
+
+    cfg = config_to_dict(GenerateConfig())
+    old = json.loads(json.dumps(cfg))
+    del old["render"]["tsdf_voxel"], old["render"]["point_source"]  # options a previous version lacked
+    Manifest(tmp_path, old, 0, ("chair",), "proc").write()
+    Manifest(tmp_path, cfg, 0, ("chair",), "proc").check_compatible()
+    cfg["render"]["point_source"] = "tsdf"
+    with pytest.raises(DataError, match="config.render"):
+        Manifest(tmp_path, cfg, 0, ("chair",), "proc").check_compatible()

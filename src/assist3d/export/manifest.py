@@ -59,7 +59,15 @@ def llm_summary(scenes: list[dict]) -> dict:
 
 
 def _comparable(cfg: dict) -> dict:
+    """``cfg`` without the ignored keys and with every option it lacks at today's default: a dataset
+    written before an option existed was made as if it had its default value, so it stays resumable."""
+    from ..config import GenerateConfig, config_to_dict
+
     out = json.loads(json.dumps(cfg))
+    for section, defaults in config_to_dict(GenerateConfig()).items():
+        if isinstance(defaults, dict) and isinstance(out.get(section), dict):
+            for key, value in defaults.items():
+                out[section].setdefault(key, value)
     for section, key in IGNORED_CONFIG_KEYS:
         out.get(section, {}).pop(key, None)
     return out
