@@ -159,4 +159,4 @@ def test_config_defaults_follow_scannet_where_cheap():
     cfg = RenderConfig()
     assert cfg.point_source == "render"
     assert (cfg.tsdf_voxel, cfg.tsdf_trunc, cfg.tsdf_trunc_per_m, cfg.tsdf_max_depth, cfg.tsdf_stride) == (
-        0.02, 0.06, 0.02, 4.0, 2)
+        0.02, 0.06, 0.02, 10.0, 2)
