@@ -46,7 +46,7 @@ from .catalog import Catalog
 from .importer import ImportReport, Progress, run_import
 from .naming import assign_groups, class_from_name
 from .normalize import MeshRejected, axes_rotation, extract_supports, flatten_geometry, normalize_arrays
-from .objfile import ObjUnsupported, obj_arrays
+from .objfile import ObjUnsupported, check_obj_text, obj_arrays
 
 log = logging.getLogger(__name__)
 
@@ -266,6 +266,7 @@ def _convert(item: MeshItem, label: str) -> tuple[AssetRecord, MeshData] | Skipp
         resolver = _folder_resolver(folder, posixpath.dirname(item.path))
         arrays = None
         if ext == "obj":
+            check_obj_text(data, label)
             try:
                 arrays = obj_arrays(data, resolver.get)
             except ObjUnsupported as e:

@@ -5,7 +5,10 @@ material with byte-level splits and numpy conversions over whole blocks instead 
 loop per token. It handles ``v``, ``vt``, ``f`` with the ``a``, ``a/b``, ``a//c`` and ``a/b/c``
 corner forms, and ``usemtl``/``mtllib``; anything else it does not understand (negative
 indices, line continuations, non-numeric fields) raises
-:class:`ObjUnsupported` so the caller can fall back to trimesh's complete loader.
+:class:`ObjUnsupported` so the caller can fall back to trimesh's complete loader. What no loader
+should accept raises :class:`~.normalize.MeshRejected` (the importers skip and report it): a face
+that references a vertex the file does not define, and a file cut inside its last record
+(:func:`check_obj_text`).
 ``parse_mtl`` reads ``newmtl``, ``Kd`` and ``map_Kd``; ``face_colors`` turns them into one colour
 per face (the texture sampled at each face's UV centroid, else ``Kd``, else grey).
 """
@@ -21,7 +24,8 @@ from typing import Callable
 
 import numpy as np
 
-from .normalize import NEUTRAL_GREY, image_array, sample_texture
+from ..errors import shown
+from .normalize import NEUTRAL_GREY, MeshRejected, image_array, sample_texture
 
 log = logging.getLogger(__name__)
 
@@ -147,8 +151,11 @@ def parse_obj(data: bytes) -> ObjData:
         raise ObjUnsupported("negative (relative) indices")
     counts, pos, tex = _corners(joined, len(f_lines))
     pos, tex = pos - 1, tex - 1
-    if len(pos) and (pos.min() < 0 or pos.max() >= len(vertices)):
-        raise ObjUnsupported("face index out of range")
+    if len(pos) and pos.min() < 0:
+        raise MeshRejected("a face uses vertex index 0 (OBJ counts vertices from 1): corrupt file")
+    if len(pos) and pos.max() >= len(vertices):
+        raise MeshRejected(f"a face references vertex {int(pos.max()) + 1} but the file defines only {len(vertices)} "
+                           "vertices: truncated or corrupt file")
     if len(uv) == 0 or (tex.max(initial=-1) >= len(uv)):
         tex = np.full(len(pos), -1, dtype=np.int64)
     # fan triangulation of every polygon with at least 3 corners
@@ -162,6 +169,59 @@ def parse_obj(data: bytes) -> ObjData:
     return ObjData(vertices=vertices, uv=uv, faces=pos[idx], face_uv=tex[idx],
                    face_material=np.asarray(line_material, dtype=np.int64)[poly], material_names=tuple(names),
                    mtllibs=mtllibs)
+
+
+#: Fewest values a complete record of each kind holds (``vt`` may give only u).
+_MIN_VALUES: dict[bytes, int] = {b"v": 3, b"vn": 3, b"vt": 1, b"f": 3}
+
+
+def _complete_value(token: bytes, face: bool) -> bool:
+    """Whether a value is whole: a number, or a face corner ``a``, ``a/b``, ``a//c``, ``a/b/c``."""
+    if not face:
+        try:
+            float(token)
+        except ValueError:
+            return False
+        return True
+    parts = token.split(b"/")
+    return bool(parts[0]) and bool(parts[-1]) and all(not x or x.lstrip(b"-").isdigit() for x in parts)
+
+
+def _cut_record(line: bytes) -> str | None:
+    """Why a last line is an incomplete record, or None when it is complete or not a record."""
+    tokens = line.split(b"#", 1)[0].split()
+    if not tokens or tokens[0] not in _MIN_VALUES:
+        return None
+    key, values = tokens[0], tokens[1:]
+    kind, noun = ("face", "corners") if key == b"f" else (f"'{key.decode()}'", "numbers")
+    if len(values) < _MIN_VALUES[key]:
+        return f"its last line, a {kind} line, holds {len(values)} of at least {_MIN_VALUES[key]} {noun}"
+    cut = next((v for v in values if not _complete_value(v, key == b"f")), None)
+    if cut is not None:
+        return f"its last line, a {kind} line, ends in the incomplete value '{shown(cut.decode('latin-1'), 20)}'"
+    return None
+
+
+def check_obj_text(data: bytes, label: str) -> None:
+    """Detect an OBJ file cut short (an interrupted download or copy).
+
+    A file that does not end with a newline and whose last line is an incomplete record (a face
+    with fewer than 3 corners, a vertex with fewer than 3 numbers, a value cut inside) raises
+    :class:`~.normalize.MeshRejected`. When that last line is a complete record the file is
+    imported, with a warning naming ``label`` that it may be cut. A file cut exactly at a line
+    break cannot be told from an intact one (most valid models are open meshes), so it is
+    imported as it is.
+    """
+    if not data or data.endswith(b"\n"):
+        return
+    last = data.rsplit(b"\n", 1)[-1].rstrip(b"\r")
+    reason = _cut_record(last)
+    if reason is not None:
+        raise MeshRejected(f"file ends without a newline and {reason}: truncated file")
+    tokens = last.split(b"#", 1)[0].split()
+    if tokens and tokens[0] in _MIN_VALUES:
+        log.warning("%s: the OBJ file does not end with a newline, so its last line '%s' may be cut short "
+                    "(truncated file?); imported as it is", shown(label, 400), shown(last.decode("latin-1"), 60))
 
 
 def parse_mtl(data: bytes) -> dict[str, ObjMaterial]:

@@ -34,7 +34,7 @@ from .importer import ImportReport, Progress, run_import
 from .naming import assign_groups, class_from_name, wall_mount
 from .normalize import (MeshRejected, axes_rotation, extract_supports, flatten_geometry, normalize_arrays,
                         support_at_height)
-from .objfile import ObjUnsupported, obj_arrays
+from .objfile import ObjUnsupported, check_obj_text, obj_arrays
 from .properties import parse_properties
 
 log = logging.getLogger(__name__)
@@ -324,6 +324,7 @@ def _load_arrays(entry: Sh3dEntry, *, fast: bool = True) -> tuple[np.ndarray, np
     data = zf.read(real)
     if not data.strip():
         raise MeshRejected(f"model file {model!r} is empty")
+    check_obj_text(data, entry.label)
     extra: dict[str, bytes] = {}
     if b"mtllib" not in data:
         mtl = builtin_mtl(m.decode("latin-1") for m in re.findall(rb"^\s*usemtl\s+(\S+)", data, re.M))

@@ -118,7 +118,11 @@ def probe_cmd(
 # ----------------------------------------------------------------------------------------------- segment
 
 def _scan_from_file(path: Path) -> tuple[str, np.ndarray, np.ndarray | None, object | None]:
-    """(scene_id, coord (N, 3), color (N, 3) uint8 or None, PointSample with GT or None) from .ply / .npy."""
+    """(scene_id, coord (N, 3) float32, color (N, 3) uint8 or None, PointSample with GT or None) from
+    .ply / .npy, N > 0. Raw points (a .ply, an (N, 3|6) .npy) may hold non-finite coordinates:
+    :func:`usable_points` picks the ones to segment. An (N, 8) .npy is read by the ``array``
+    reader and follows its rules."""
+    from ..data.base import REAL_KINDS, clean_colors, read_npy
     from ..data.ply import read_ply
 
     if not path.is_file():
@@ -126,25 +130,41 @@ def _scan_from_file(path: Path) -> tuple[str, np.ndarray, np.ndarray | None, obj
     suffix = path.suffix.lower()
     if suffix == ".ply":
         mesh = read_ply(path)
-        coord = mesh.xyz()
-        color = mesh.rgb()
-        return path.stem, coord, color, None
-    if suffix == ".npy":
-        try:
-            a = np.load(path, allow_pickle=False)
-        except (ValueError, OSError, EOFError) as e:
-            raise DataError(f"{path}: not a readable .npy array ({type(e).__name__}: {str(e)[:120]})") from None
-        if a.ndim != 2 or a.shape[1] not in (3, 6, 8) or not np.issubdtype(a.dtype, np.number):
+        coord, color = mesh.xyz(), mesh.rgb()
+    elif suffix == ".npy":
+        a = read_npy(path)
+        if a.ndim != 2 or a.shape[1] not in (3, 6, 8) or a.dtype.kind not in REAL_KINDS:
             raise DataError(f"{path}: expected a numeric (N, 3), (N, 6) or (N, 8) array (xyz[, rgb[, semantic, instance]]), "
                             f"got {a.dtype} {a.shape}")
-        if a.shape[1] == 8:
+        if a.shape[1] == 8 and len(a):
             from ..data.array import ArrayDataset
 
             s = ArrayDataset(path).load(path.stem)
             return path.stem, s.coord, s.color, s
-        color = np.clip(np.rint(a[:, 3:6]), 0, 255).astype(np.uint8) if a.shape[1] >= 6 else None
-        return path.stem, np.asarray(a[:, :3], np.float32), color, None
-    raise DataError(f"{path}: unsupported input {suffix or '(no suffix)'}; give a .ply, an (N, 3|6|8) .npy or FORMAT:PATH")
+        with np.errstate(over="ignore", invalid="ignore"):
+            coord = np.ascontiguousarray(a[:, :3], np.float32)
+        color = clean_colors(path, a[:, 3:6]) if a.shape[1] >= 6 else None
+    else:
+        raise DataError(f"{path}: unsupported input {suffix or '(no suffix)'}; give a .ply, an (N, 3|6|8) .npy or FORMAT:PATH")
+    if len(coord) == 0:
+        raise DataError(f"{path}: scene {shown(path.stem)} has no points")
+    return path.stem, coord, color, None
+
+
+def usable_points(where: str, scene_id: str, coord: np.ndarray) -> np.ndarray:
+    """(N,) bool: the points to segment, those with finite coordinates within ``MAX_COORD_M``;
+    the others get no instance, with one warning giving their count. DataError when none is left."""
+    from ..data.base import MAX_COORD_M
+
+    with np.errstate(invalid="ignore"):
+        ok = np.all(np.isfinite(coord) & (np.abs(coord) <= MAX_COORD_M), axis=1)
+    if not ok.all():
+        log.warning("%s: %d of %d points have non-finite coordinates or lie beyond ±%.0e m; they get no instance",
+                    shown(scene_id), int((~ok).sum()), len(coord), MAX_COORD_M)
+        if not ok.any():
+            raise DataError(f"{where}: scene {shown(scene_id)}: no point has finite coordinates "
+                            f"within ±{MAX_COORD_M:.0e} m")
+    return ok
 
 
 def _inputs(spec: str):
@@ -232,12 +252,7 @@ def segment_cmd(
         coord = np.asarray(coord, np.float32)
         if len(coord) == 0:
             raise DataError(f"{input_}: scene {shown(scene_id)} has no points")
-        finite = np.all(np.isfinite(coord), axis=1)
-        if not finite.all():
-            log.warning("%s: %d of %d points have non-finite coordinates; they get no instance",
-                        shown(scene_id), int((~finite).sum()), len(coord))
-            if not finite.any():
-                raise DataError(f"{input_}: scene {shown(scene_id)}: no point has finite coordinates")
+        finite = usable_points(input_, scene_id, coord)
         sub_color = color[finite] if color is not None else None
         if loaded is not None:
             from ..segmenter.infer import segment_points
@@ -255,7 +270,7 @@ def segment_cmd(
         out.mkdir(parents=True, exist_ok=True)
         save_predictions(out / f"{scene_id}.npz", masks, seg.scores)
         colors = instance_colors(labels)
-        safe_coord = np.where(np.isfinite(coord), coord, 0).astype(np.float32)
+        safe_coord = np.where(finite[:, None], coord, 0).astype(np.float32)
         write_ply(out / f"{scene_id}.ply", safe_coord, colors)
         if png:
             _png(out / f"{scene_id}.png", safe_coord[finite], colors[finite], f"{scene_id}: {len(seg.scores)} instances")

@@ -14,7 +14,9 @@ assist3d    our generator's output folder                                  -
 array       one ``(N, 8)`` ``.npy`` or a folder of them                    -
 ==========  =============================================================  ====================
 
-In every reader, objects are the points with ``instance >= 0``; ``instance == -1`` is void.
+In every reader, objects are the points with ``instance >= 0``; ``instance == -1`` is void. Bad
+points and labels are refused with a :class:`~assist3d.errors.DataError` naming the file; bad
+colours and normals are cleaned with a warning (``docs/evaluation.md``, "Input validation").
 """
 
 from __future__ import annotations

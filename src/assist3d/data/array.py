@@ -6,6 +6,11 @@ Columns: x, y, z, r, g, b, semantic (ScanNet-20 class index + 1; 0 = none), inst
 Objects follow the ScanNet protocol: points whose semantic label is 3..20 (the 18 classes other
 than wall and floor) keep their instance id; labels 0, 1, 2 are void (instance -1). ``segment`` is
 the ScanNet-20 index (semantic - 1; -1 for label 0).
+
+Validation (``docs/evaluation.md``, "Input validation"): an array that is not ``(N, 8)`` real
+numbers, has no rows, non-finite or far-out coordinates, fractional or non-finite labels, semantic
+labels outside 0..20 or instance ids beyond int32 is refused; instance ids below -1 become void and
+colours outside 0..255 are clipped, each with a warning.
 """
 
 from __future__ import annotations
@@ -17,7 +22,7 @@ import numpy as np
 
 from ..contracts import PointSample
 from ..errors import DataError
-from .base import SceneDataset, read_npy
+from .base import MAX_INSTANCE_ID, REAL_KINDS, SceneDataset, checked_coords, clean_colors, integer_labels, read_npy
 
 log = logging.getLogger(__name__)
 
@@ -44,16 +49,17 @@ class ArrayDataset(SceneDataset):
         a = read_npy(path)
         if a.ndim != 2 or a.shape[1] != 8:
             raise DataError(f"{path}: expected an (N, 8) array (xyz, rgb, semantic, instance), got shape {a.shape}")
-        if not np.issubdtype(a.dtype, np.number):
-            raise DataError(f"{path}: expected a numeric array, got dtype {a.dtype}")
+        if a.dtype.kind not in REAL_KINDS:
+            raise DataError(f"{path}: expected a numeric array (int or float), got dtype {a.dtype}")
+        coord = checked_coords(path, a[:, :3])
         n = len(a)
-        semantic = np.rint(a[:, 6]).astype(np.int32)
-        inst = np.rint(a[:, 7]).astype(np.int32)
+        semantic = integer_labels(path, a[:, 6], "semantic labels (column 6)", low=0, high=LAST_OBJECT_LABEL)
+        inst = integer_labels(path, a[:, 7], "instance ids (column 7)", low=-1, high=MAX_INSTANCE_ID, void_below=True)
         is_object = (semantic >= FIRST_OBJECT_LABEL) & (semantic <= LAST_OBJECT_LABEL)
         return PointSample(
             scene_id=scene_id,
-            coord=np.ascontiguousarray(a[:, :3], dtype=np.float32),
-            color=np.clip(np.rint(a[:, 3:6]), 0, 255).astype(np.uint8),
+            coord=coord,
+            color=clean_colors(path, a[:, 3:6]),
             normal=np.zeros((n, 3), np.float32),
             instance=np.where(is_object, inst, -1).astype(np.int32),
             segment=np.where(semantic > 0, semantic - 1, -1).astype(np.int32),

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DataError, shown
+from .base import checked_coords, clean_colors, clean_normals
 
 log = logging.getLogger(__name__)
 
@@ -59,8 +60,10 @@ class PlyMesh:
     faces: np.ndarray | None
 
     def xyz(self) -> np.ndarray:
-        """``(N, 3) float32`` vertex positions."""
-        return _stack_fields(self, ("x", "y", "z")).astype(np.float32, copy=False)
+        """``(N, 3) float32`` vertex positions (as stored: not checked to be finite; doubles too
+        large for float32 become inf)."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            return _stack_fields(self, ("x", "y", "z")).astype(np.float32, copy=False)
 
     def rgb(self) -> np.ndarray | None:
         """``(N, 3) uint8`` vertex colours, or ``None`` when the file has none."""
@@ -68,9 +71,11 @@ class PlyMesh:
         for fields in (("red", "green", "blue"), ("r", "g", "b"), ("diffuse_red", "diffuse_green", "diffuse_blue")):
             if all(f in names for f in fields):
                 c = _stack_fields(self, fields)
-                if c.dtype.kind == "f" and c.size and float(c.max()) <= 1.0:
-                    c = c * 255.0
-                return np.clip(np.rint(c), 0, 255).astype(np.uint8) if c.dtype.kind == "f" else np.clip(c, 0, 255).astype(np.uint8)
+                if c.dtype.kind == "f":
+                    finite = c[np.isfinite(c)]
+                    if finite.size and float(finite.max()) <= 1.0:
+                        c = c * 255.0
+                return clean_colors(self.path, c)
         return None
 
 
@@ -79,7 +84,7 @@ def mesh_normals(mesh: "PlyMesh") -> np.ndarray:
     normals from the faces, else zeros."""
     names = mesh.vertex.dtype.names or ()
     if all(f in names for f in ("nx", "ny", "nz")):
-        return _stack_fields(mesh, ("nx", "ny", "nz")).astype(np.float32)
+        return clean_normals(mesh.path, _stack_fields(mesh, ("nx", "ny", "nz")))
     coord = mesh.xyz()
     if mesh.faces is None:
         return np.zeros((len(coord), 3), np.float32)
@@ -306,9 +311,11 @@ def write_ply(path: str | Path, coord: np.ndarray, color: np.ndarray | None = No
 
 def read_scan_mesh(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A scan mesh's per-vertex (coord (n, 3) float32, color (n, 3) uint8 (zeros when the file has
-    none), normal (n, 3) float32 area-weighted vertex normals), in vertex order."""
+    none), normal (n, 3) float32 area-weighted vertex normals), in vertex order. An empty mesh and
+    non-finite or far-out coordinates raise :class:`DataError`; colours are cleaned (see
+    :func:`~.base.clean_colors`)."""
     mesh = read_ply(path, faces=True)
-    coord = mesh.xyz()
+    coord = checked_coords(mesh.path, mesh.xyz(), "vertex coordinates")
     color = mesh.rgb()
     if color is None:
         color = np.zeros((len(coord), 3), np.uint8)

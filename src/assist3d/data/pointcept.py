@@ -16,6 +16,11 @@ excluded classes.
 ``assist3d:PATH`` reads our generator's output (the same layout plus ``layout.json`` and
 ``meta.json`` per scene): every ``instance >= 0`` point is an object. The generator writes
 ``meta.json`` last, so folders without it (an interrupted or running job) are skipped.
+
+Validation (``docs/evaluation.md``, "Input validation"): arrays whose lengths disagree, empty scenes,
+non-numeric arrays, non-finite or far-out coordinates, fractional or non-finite labels, and class
+indices or instance ids out of range are refused; labels below -1 (e.g. an ignore index of -100)
+become -1, non-finite normals zero and colours outside 0..255 are clipped, each with a warning.
 """
 
 from __future__ import annotations
@@ -27,7 +32,8 @@ import numpy as np
 
 from ..contracts import PointSample
 from ..errors import DataError
-from .base import SceneDataset, read_npy
+from .base import (MAX_CLASS_INDEX, MAX_INSTANCE_ID, SceneDataset, checked_coords, clean_colors, clean_normals,
+                   integer_labels, read_npy)
 
 log = logging.getLogger(__name__)
 
@@ -85,19 +91,21 @@ class PointceptDataset(SceneDataset):
 
     def _load(self, scene_id: str) -> PointSample:
         d = self._dirs[scene_id]
-        coord = read_npy(d / "coord.npy")
+        coord_path = d / "coord.npy"
+        coord = read_npy(coord_path)
         if coord.ndim != 2 or coord.shape[1] != 3:
-            raise DataError(f"{d / 'coord.npy'}: expected shape (N, 3), got {coord.shape}")
+            raise DataError(f"{coord_path}: expected shape (N, 3), got {coord.shape}")
+        coord = checked_coords(coord_path, coord)
         n = len(coord)
 
-        def optional(name: str, shape: tuple[int, ...]) -> np.ndarray | None:
+        def optional(name: str, shape: tuple[int, ...]) -> tuple[Path, np.ndarray] | None:
             p = d / f"{name}.npy"
             if not p.is_file():
                 return None
             a = read_npy(p)
             if a.shape != shape:
                 raise DataError(f"{p}: expected shape {shape} to match coord.npy, got {a.shape}")
-            return a
+            return p, a
 
         color = optional("color", (n, 3))
         normal = optional("normal", (n, 3))
@@ -106,9 +114,10 @@ class PointceptDataset(SceneDataset):
         segment = optional(seg_name, (n,)) if seg_name else None
         if self._segment and segment is None:
             raise DataError(f"{d / (self._segment + '.npy')}: file not found")
-        segment_i = np.full(n, -1, np.int32) if segment is None else np.rint(segment).astype(np.int32)
-        instance_i = np.full(n, -1, np.int32) if instance is None else np.rint(instance).astype(np.int32)
-        instance_i[instance_i < 0] = -1
+        segment_i = np.full(n, -1, np.int32) if segment is None else integer_labels(
+            *segment, "class indices", low=-1, high=MAX_CLASS_INDEX, void_below=True)
+        instance_i = np.full(n, -1, np.int32) if instance is None else integer_labels(
+            *instance, "instance ids", low=-1, high=MAX_INSTANCE_ID, void_below=True)
         ignore = self._ignore
         if ignore is None:
             ignore = DEFAULT_IGNORE.get(seg_name or "segment", ()) if self.format == "pointcept" else ()
@@ -116,21 +125,21 @@ class PointceptDataset(SceneDataset):
             ignore = (-1, *ignore)
         if ignore:
             instance_i[np.isin(segment_i, np.asarray(ignore, np.int32))] = -1
-        if color is None:
-            color_u8 = np.zeros((n, 3), np.uint8)
-        elif color.dtype == np.uint8:
-            color_u8 = np.ascontiguousarray(color)
-        else:
-            c = color.astype(np.float64)
-            if c.size and c.max() <= 1.0:
-                c = c * 255.0
-            color_u8 = np.clip(np.rint(c), 0, 255).astype(np.uint8)
         return PointSample(
             scene_id=scene_id,
-            coord=np.ascontiguousarray(coord, dtype=np.float32),
-            color=color_u8,
-            normal=np.zeros((n, 3), np.float32) if normal is None else np.ascontiguousarray(normal, dtype=np.float32),
+            coord=coord,
+            color=np.zeros((n, 3), np.uint8) if color is None else _colors(*color),
+            normal=np.zeros((n, 3), np.float32) if normal is None else clean_normals(*normal),
             instance=instance_i,
             segment=segment_i,
             valid=np.ones(n, bool),
         )
+
+
+def _colors(path: Path, color: np.ndarray) -> np.ndarray:
+    """uint8 colours from 0..255 values, or from 0..1 floats (scaled when no finite value exceeds 1)."""
+    if color.dtype.kind == "f":
+        finite = color[np.isfinite(color)]
+        if finite.size and finite.max() <= 1.0:
+            color = color * 255.0
+    return clean_colors(path, color)

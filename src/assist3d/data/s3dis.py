@@ -18,7 +18,9 @@ its files' sizes and modification times (about 23 bytes per point).
 
 The v1.2 release has one corrupt line (``Area_5/hallway_6/Annotations/ceiling_1.txt`` row 180389,
 a stray character inside a number). Characters that cannot belong to a number are removed and a
-warning names the file and line; any other malformed content raises :class:`DataError`.
+warning names the file and line; any other malformed content raises :class:`DataError`, and so do
+non-finite or far-out coordinates and a room without points. Colours outside 0..255 are clipped
+with a warning.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ from ..contracts import PointSample
 from ..errors import ConfigError, DataError, shown
 from ..fileio import write_bytes_atomic
 from ..paths import cache_root
-from .base import SceneDataset
+from .base import SceneDataset, checked_coords, clean_colors
 
 log = logging.getLogger(__name__)
 
@@ -87,6 +89,7 @@ def read_s3dis_txt(path: Path) -> np.ndarray:
         raise DataError(f"{path}: malformed S3DIS annotation file ({shown(e)})") from None
     if arr.shape[1] != 6:
         raise DataError(f"{path}: expected 6 columns (x y z r g b), found {arr.shape[1]}")
+    checked_coords(path, arr[:, :3])
     return arr
 
 
@@ -144,12 +147,14 @@ class S3DISDataset(SceneDataset):
             raise DataError(f"{anno}: no <class>_<k>.txt annotation files")
         files.sort(key=lambda t: (t[2], t[1]))
         parts: list[np.ndarray] = []
+        colors: list[np.ndarray] = []
         instance: list[np.ndarray] = []
         segment: list[np.ndarray] = []
         next_id = 0
         for cls_idx, _k, _name, f in files:
             pts = read_s3dis_txt(f)
             parts.append(pts)
+            colors.append(clean_colors(f, pts[:, 3:6]))
             if S3DIS_CLASSES[cls_idx] in S3DIS_STUFF:
                 instance.append(np.full(len(pts), -1, np.int32))
             else:
@@ -158,10 +163,12 @@ class S3DISDataset(SceneDataset):
             segment.append(np.full(len(pts), cls_idx, np.int32))
         data = np.concatenate(parts)
         n = len(data)
+        if n == 0:
+            raise DataError(f"{anno}: no points (every annotation file is empty)")
         return PointSample(
             scene_id=scene_id,
             coord=np.ascontiguousarray(data[:, :3], dtype=np.float32),
-            color=np.clip(np.rint(data[:, 3:6]), 0, 255).astype(np.uint8),
+            color=np.concatenate(colors),
             normal=np.zeros((n, 3), np.float32),
             instance=np.concatenate(instance),
             segment=np.concatenate(segment),

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..contracts import PointSample
 from ..errors import DataError, shown
-from .base import SceneDataset, instances_from_groups, read_json, require_key
+from .base import SceneDataset, instances_from_groups, integer_list, read_json, require_key
 from .ply import read_scan_mesh
 
 log = logging.getLogger(__name__)
@@ -72,6 +72,16 @@ def _find_label_map(root: Path, labels: str | None) -> Path | None:
     return None
 
 
+def _object_id(path: Path, group: object) -> int:
+    """A segGroup's ``objectId`` (else ``id``, else 0), the order objects are numbered in."""
+    if not isinstance(group, dict):
+        return 0  # reported as a missing key when the group is read
+    value = group.get("objectId", group.get("id", 0))
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise DataError(f"{path}: segGroups objectId '{shown(value, 40)}' is not an integer")
+    return value
+
+
 def _is_scene_dir(d: Path) -> bool:
     return (d / f"{d.name}_vh_clean_2.ply").is_file()
 
@@ -108,7 +118,7 @@ class ScanNetDataset(SceneDataset):
         n = len(coord)
 
         segs_path = d / f"{scene_id}_vh_clean_2.0.010000.segs.json"
-        seg = np.asarray(require_key(segs_path, read_json(segs_path), "segIndices", list), dtype=np.int64)
+        seg = integer_list(segs_path, "segIndices", require_key(segs_path, read_json(segs_path), "segIndices", list))
         if seg.ndim != 1 or len(seg) != n:
             raise DataError(f"{segs_path}: {len(seg)} segment indices for a mesh of {n} vertices")
 
@@ -118,7 +128,7 @@ class ScanNetDataset(SceneDataset):
         nyu_to_20 = {nyu: i for i, nyu in enumerate(SCANNET20_NYU40)}
         groups: list[tuple[list[int], bool, int]] = []
         unknown: set[str] = set()
-        for g in sorted(groups_raw, key=lambda g: g.get("objectId", g.get("id", 0)) if isinstance(g, dict) else 0):
+        for g in sorted(groups_raw, key=lambda g: _object_id(agg_path, g)):
             label = require_key(agg_path, g, "label", str)
             segments = require_key(agg_path, g, "segments", list)
             nyu = label_map.get(label)

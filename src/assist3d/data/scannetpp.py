@@ -21,7 +21,7 @@ import numpy as np
 
 from ..contracts import PointSample
 from ..errors import DataError, shown
-from .base import SceneDataset, instances_from_groups, read_json, require_key
+from .base import SceneDataset, instances_from_groups, integer_list, read_json, require_key
 from .ply import read_scan_mesh
 
 log = logging.getLogger(__name__)
@@ -61,7 +61,7 @@ class ScanNetPPDataset(SceneDataset):
         n = len(coord)
 
         seg_path = scans / "segments.json"
-        seg = np.asarray(require_key(seg_path, read_json(seg_path), "segIndices", list), dtype=np.int64)
+        seg = integer_list(seg_path, "segIndices", require_key(seg_path, read_json(seg_path), "segIndices", list))
         if seg.ndim != 1 or len(seg) != n:
             raise DataError(f"{seg_path}: {len(seg)} segment indices for a mesh of {n} vertices")
         anno_path = scans / "segments_anno.json"

@@ -12,8 +12,10 @@ import numpy as np
 
 from ..data.base import SceneDataset
 from ..errors import DataError
+from ..errors import shown as show_text
 from ..interrupts import worker_pool
-from .ap import ALL_THRESHOLDS, METRIC_KEYS, Metrics, SceneMatches, match_scene, recall_on, summarize
+from .ap import (ALL_THRESHOLDS, METRIC_KEYS, MIN_REGION_SIZE, Metrics, SceneMatches, match_scene, recall_on,
+                 summarize)
 from .ood import FeatureFn, dataset_features, default_feature, instance_features, ood_threshold
 from .predictions import import_scannet_txt, load_predictions
 
@@ -91,6 +93,18 @@ def _score_scene(job: tuple) -> tuple[SceneMatches, np.ndarray | None]:
     return m, ids[np.linalg.norm(feats.astype(np.float64) - ood_mean, axis=1) > d_max]
 
 
+def _warn_scenes_without_objects(dataset: SceneDataset, matches: list[SceneMatches]) -> None:
+    """One warning naming the scenes with no ground-truth object to score (every label void or
+    invalid, or every object under the minimum size): their AP/AR are undefined (NaN / null)."""
+    empty = [m.scene_id for m in matches if m.num_gt == 0]
+    if not empty:
+        return
+    names = ", ".join(show_text(s, 80) for s in empty[:5]) + (f", ... ({len(empty)} in all)" if len(empty) > 5 else "")
+    log.warning("%s: %d of %d scenes have no ground-truth object of at least %d valid points (every label void, "
+                "excluded or on too few points), so their own AP/AR are undefined (NaN, null in JSON): %s",
+                dataset.name, len(empty), len(matches), MIN_REGION_SIZE, names)
+
+
 def evaluate_dataset(
     dataset: SceneDataset,
     pred_dir: str | Path,
@@ -152,6 +166,7 @@ def evaluate_dataset(
         with worker_pool(min(workers, len(jobs))) as pool:  # stopped at once on an interrupt
             for i, (m, chosen) in enumerate(pool.map(_score_scene, jobs)):
                 collect(i, m, chosen)
+    _warn_scenes_without_objects(dataset, matches)
     overall = summarize(matches)
     ood = recall_on(matches, selected) if ood_reference is not None else None
     return EvaluationResult(dataset=f"{dataset.format}:{dataset.root}", overall=overall, per_scene=per_scene, ood=ood, missing=missing)
