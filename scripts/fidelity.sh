@@ -11,7 +11,9 @@
 # generator, default 60), GENERATORS (default "assist3d randomrooms holodeck-style no-context
 # mesh-sampled"), ASSETS (catalog folder; the docs use Sweet Home 3D + the procedural library),
 # DEV (real scans, default ../shared/data/real/dev), THREADS (torch threads, default 2),
-# SKIP_REAL=1 to leave out the leave-one-room-out rows.
+# SKIP_REAL=1 to leave out the leave-one-room-out rows; TSDF=1 adds "assist3d-tsdf": the ASSIST-3D
+# preset with render.point_source=tsdf (ScanNet-like reconstructed surfaces; needs the [sim] extra),
+# the same scenes as "assist3d" (same seed and layouts), only the points differ.
 set -euo pipefail
 
 OUT=${1:?usage: scripts/fidelity.sh OUT_DIR}
@@ -34,7 +36,15 @@ for g in $GENERATORS; do
     "${ASSET_ARGS[@]}" --json > "$OUT/data/$g.generate.json"
 done
 
-for g in $GENERATORS; do
+PROBED="$GENERATORS"
+if [[ "${TSDF:-0}" == 1 ]]; then
+  printf 'render:\n  point_source: tsdf\n' > "$OUT/data/tsdf.yaml"
+  "$ASSIST3D" generate --out "$OUT/data/assist3d-tsdf" --num-scenes "$SCENES" --seed 0 --preset assist3d --workers 2 \
+    --config "$OUT/data/tsdf.yaml" "${ASSET_ARGS[@]}" --json > "$OUT/data/assist3d-tsdf.generate.json"
+  PROBED="$PROBED assist3d-tsdf"
+fi
+
+for g in $PROBED; do
   "$ASSIST3D" probe --train "assist3d:$OUT/data/$g" --eval "array:$DEV" --steps "$STEPS" --seeds "$SEEDS" \
     --threads "$THREADS" --out "$OUT/probe/$g" --json > "$OUT/probe/$g.json"
   echo "probe $g done" >&2
