@@ -17,7 +17,7 @@ from .errors import ConfigError
 
 
 class _Section(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)  # NaN/inf: never wanted
 
 
 class AssetsConfig(_Section):
@@ -25,19 +25,22 @@ class AssetsConfig(_Section):
 
     library: str | None = Field(None, description="Catalog folder; None = $ASSIST3D_ASSETS or the default cache folder, "
                                                   "falling back to the built-in procedural library.")
-    procedural_count: int = Field(2000, ge=1, description="Assets in the built-in procedural library when it is built "
-                                                          "on the fly (paper: ~50,000 Objaverse models; n/a).")
-    procedural_seed: int = Field(0, description="Seed of the built-in procedural library.")
+    procedural_count: int = Field(2000, ge=1, le=100_000, description="Assets in the built-in procedural library when "
+                                                          "it is built on the fly, at most 100,000 (paper: ~50,000 "
+                                                          "Objaverse models; n/a).")
+    procedural_seed: int = Field(0, ge=0, le=2**32 - 1, description="Seed of the built-in procedural library "
+                                                                    "(0..2^32-1).")
 
 
 class RoomConfig(_Section):
     """Room shell sampling (ScanNet-like rooms)."""
 
-    area_min: float = Field(10.0, gt=0, description="Smallest floor area, m^2 (ScanNet rooms: ~10-60 m^2).")
-    area_max: float = Field(60.0, gt=0, description="Largest floor area, m^2.")
-    aspect_max: float = Field(2.0, ge=1, description="Largest ratio of the long to the short side.")
-    height_min: float = Field(2.4, gt=0, description="Lowest wall height, m (ScanNet: 2.4-3.2 m).")
-    height_max: float = Field(3.2, gt=0, description="Highest wall height, m.")
+    area_min: float = Field(10.0, gt=0, le=1000, description="Smallest floor area, m^2, at most 1000 (ScanNet rooms: "
+                                                             "~10-60 m^2).")
+    area_max: float = Field(60.0, gt=0, le=1000, description="Largest floor area, m^2, at most 1000.")
+    aspect_max: float = Field(2.0, ge=1, le=10, description="Largest ratio of the long to the short side, at most 10.")
+    height_min: float = Field(2.4, gt=0, le=20, description="Lowest wall height, m, at most 20 (ScanNet: 2.4-3.2 m).")
+    height_max: float = Field(3.2, gt=0, le=20, description="Highest wall height, m, at most 20.")
     l_shape_prob: float = Field(0.3, ge=0, le=1, description="Probability of an L-shaped footprint.")
     doors: tuple[int, int] = Field((1, 2), description="Inclusive range of door openings per room.")
     windows: tuple[int, int] = Field((0, 3), description="Inclusive range of window openings per room.")
@@ -47,9 +50,12 @@ class RoomConfig(_Section):
 class SelectionConfig(_Section):
     """Heterogeneous object selection (paper section 'Heterogeneous Object Selection')."""
 
-    floor_count: int = Field(100, ge=0, description="M1: floor objects sampled per scene (paper: 100).")
-    wall_count: int = Field(50, ge=0, description="M2: wall objects sampled per scene (paper: 50).")
-    on_top_count: int = Field(5, ge=0, description="K: on-top objects sampled per floor/wall object (paper: 5).")
+    floor_count: int = Field(100, ge=0, le=10_000, description="M1: floor objects sampled per scene, at most 10,000 "
+                                                               "(paper: 100).")
+    wall_count: int = Field(50, ge=0, le=10_000, description="M2: wall objects sampled per scene, at most 10,000 "
+                                                             "(paper: 50).")
+    on_top_count: int = Field(5, ge=0, le=50, description="K: on-top objects sampled per floor/wall object, at most 50 "
+                                                          "(paper: 5).")
     real_class_prob: float = Field(0.7, ge=0, le=1, description="p: probability a draw is restricted to the target "
                                                                  "real dataset's classes in complementary scenes "
                                                                  "(paper: 0.7).")
@@ -70,7 +76,8 @@ class SelectionConfig(_Section):
                                                                    "(ASSIST-3D).")
     max_classes: int | None = Field(None, ge=1, description="Restrict selection to this many classes "
                                                             "(scalability ablation: 100/200/400; None = all).")
-    class_pool_seed: int = Field(0, description="Seed fixing which classes survive max_classes and class pairing.")
+    class_pool_seed: int = Field(0, ge=0, le=2**32 - 1, description="Seed fixing which classes survive max_classes "
+                                                                    "and class pairing (0..2^32-1).")
     sampling: Literal["class", "asset"] = Field("class", description="'class': uniform over classes, then over "
                                                                       "the assets of the class (a class with many "
                                                                       "near-identical models does not dominate); "
@@ -110,23 +117,32 @@ class LayoutConfig(_Section):
     planner: Literal["rules", "llm", "none"] = Field("rules", description="Relation planner: rule-based (default), "
                                                                           "an OpenAI-compatible LLM (paper: GPT-4), or "
                                                                           "none (random baseline).")
-    cell_size: float = Field(0.15, gt=0, description="Floor grid cell, m (paper: uniform grid; 0.1-0.25).")
-    rotations: int = Field(4, ge=1, description="Yaw steps per full turn tried for each object (>= 4).")
-    wall_step: float = Field(0.1, gt=0, description="Step along walls for wall objects, m.")
+    cell_size: float = Field(0.15, ge=0.01, le=2, description="Floor grid cell, m, 0.01..2 (paper: uniform grid; "
+                                                              "0.1-0.25).")
+    rotations: int = Field(4, ge=1, le=360, description="Yaw steps per full turn tried for each object (>= 4; at "
+                                                        "most 360).")
+    wall_step: float = Field(0.1, ge=0.01, le=2, description="Step along walls for wall objects, m, 0.01..2.")
     clearance: float = Field(0.02, ge=0, description="Minimum gap between objects, m.")
     door_clearance: float = Field(0.8, ge=0, description="Free depth kept in front of doors, m.")
     front_clearance: float = Field(0.3, ge=0, description="An object's front must be this far from walls, m.")
-    group_budget_s: float = Field(4.0, gt=0, description="Wall-clock safety net of the search per group, s. The "
+    group_budget_s: float = Field(4.0, gt=0, le=600, description="Wall-clock safety net of the search per group, s, "
+                                                       "at most 600. The "
                                                        "deterministic limits below end the search long before it in "
                                                        "practice; if it ever binds, the layout depends on machine load "
                                                        "and a warning says so.")
-    max_backtracks: int = Field(2000, ge=0, description="Backtracking steps per group before giving up.")
-    max_nodes: int = Field(2000, ge=1, description="Candidate evaluations per group before backtracking stops "
+    max_backtracks: int = Field(2000, ge=0, le=10**9, description="Backtracking steps per group before giving up "
+                                                                  "(at most 1,000,000,000; group_budget_s ends any "
+                                                                  "search).")
+    max_nodes: int = Field(2000, ge=1, le=10**9, description="Candidate evaluations per group before backtracking "
+                                                             "stops, at most 1,000,000,000 "
                                                    "(deterministic work budget; a 100-object floor group needs ~500).")
-    max_on_top_per_support: int = Field(5, ge=0, description="On-top objects placed per support at most.")
-    max_branch: int = Field(3, ge=1, description="Positions tried per object when the search backtracks: the best "
+    max_on_top_per_support: int = Field(5, ge=0, le=50, description="On-top objects placed per support at most "
+                                                                    "(0..50).")
+    max_branch: int = Field(3, ge=1, le=100, description="Positions tried per object when the search backtracks "
+                                                         "(at most 100): the best "
                                                  "one, then spread-out alternatives (paper: every valid cell; n/a).")
-    patience: int = Field(20, ge=0, description="Backtracking steps without a layout holding more objects before a "
+    patience: int = Field(20, ge=0, le=10**9, description="Backtracking steps (at most 1,000,000,000) without a "
+                                                              "layout holding more objects before a "
                                                 "group's search settles for its best (paper: n/a).")
 
 
@@ -135,9 +151,12 @@ class RenderConfig(_Section):
 
     backend: Literal["embree", "numpy"] = Field("embree", description="Ray-casting backend: embree (fast, default) "
                                                                       "or numpy (slow, exact reference).")
-    vantage_points: int = Field(5, ge=1, description="Camera positions picked by farthest point sampling (paper: 5).")
-    views_per_point: int = Field(12, ge=1, description="Views per position (paper: 12 at 30-degree steps).")
-    vantage_cell: float = Field(0.1, gt=0, description="Grid cell of the mid-height plane for vantage points, m "
+    vantage_points: int = Field(5, ge=1, le=100, description="Camera positions picked by farthest point sampling, at "
+                                                             "most 100 (paper: 5).")
+    views_per_point: int = Field(12, ge=1, le=360, description="Views per position, at most 360 (paper: 12 at "
+                                                               "30-degree steps).")
+    vantage_cell: float = Field(0.1, ge=0.01, le=2, description="Grid cell of the mid-height plane for vantage points, "
+                                                                "m, 0.01..2 "
                                                        "(paper: 0.1).")
     vantage_clearance: float = Field(0.3, ge=0, description="Minimum distance of a vantage point to objects and "
                                                             "walls, m.")
@@ -149,14 +168,17 @@ class RenderConfig(_Section):
                                                                      "mid-height sees no floor within ~3 m, so views "
                                                                      "alternate between looking down and level, as a "
                                                                      "hand-held scan does.")
-    width: int = Field(640, ge=8, description="Image width, px (ScanNet depth: 640).")
-    height: int = Field(480, ge=8, description="Image height, px (ScanNet depth: 480).")
+    width: int = Field(640, ge=8, le=16384, description="Image width, px, 8..16384 (ScanNet depth: 640); with height, "
+                                                        "views and voxel_size also bounded by a memory estimate that "
+                                                        "refuses a run before it starts (assist3d.bounds).")
+    height: int = Field(480, ge=8, le=16384, description="Image height, px, 8..16384 (ScanNet depth: 480).")
     fx: float = Field(577.9, gt=0, description="Focal length x, px (ScanNet depth ~577.9).")
     fy: float = Field(577.9, gt=0, description="Focal length y, px.")
     cx: float | None = Field(None, description="Principal point x, px; None = (width - 1) / 2.")
     cy: float | None = Field(None, description="Principal point y, px; None = (height - 1) / 2.")
-    threads: int = Field(2, ge=1, description="Ray-casting threads.")
-    voxel_size: float = Field(0.02, gt=0, description="Voxel downsampling size, m (paper: voxel downsampling; "
+    threads: int = Field(2, ge=1, le=256, description="Ray-casting threads, at most 256.")
+    voxel_size: float = Field(0.02, ge=0.001, le=1, description="Voxel downsampling size, m, 0.001..1 (paper: voxel "
+                                                                "downsampling; "
                                                       "ScanNet-like 2 cm).")
     labels: Literal["ray", "nearest"] = Field("ray", description="Instance labels from the ray hit (exact) or the "
                                                                  "paper's nearest-object assignment.")
@@ -208,16 +230,20 @@ class LLMConfig(_Section):
     vlm_model: str | None = Field(None, description="Vision model for layout scores (paper: gpt-4o); None = model.")
     temperature: float = Field(0.0, ge=0, le=2, description="Sampling temperature.")
     api_key_env: str = Field("OPENAI_API_KEY", description="Environment variable holding the API key (never stored).")
-    timeout_s: float = Field(60.0, gt=0, description="Per-request time-out, s.")
-    retries: int = Field(2, ge=0, description="Retries after a failed request, with exponential back-off.")
-    backoff_s: float = Field(1.0, ge=0, description="First back-off delay, s.")
-    max_response_bytes: int = Field(200_000, ge=1000, description="Larger answers are rejected.")
-    max_tokens: int = Field(4096, ge=16, description="max_tokens sent with each request.")
-    concurrency: int = Field(4, ge=1, description="Concurrent requests across all workers.")
+    timeout_s: float = Field(60.0, gt=0, le=3600, description="Per-request time-out, s, at most 3600.")
+    retries: int = Field(2, ge=0, le=20, description="Retries after a failed request, with exponential back-off "
+                                                     "(at most 20).")
+    backoff_s: float = Field(1.0, ge=0, le=600, description="First back-off delay, s, at most 600.")
+    max_response_bytes: int = Field(200_000, ge=1000, le=100_000_000, description="Larger answers are rejected "
+                                                                                  "(at most 100,000,000 bytes).")
+    max_tokens: int = Field(4096, ge=16, le=1_000_000, description="max_tokens sent with each request (at most "
+                                                                   "1,000,000).")
+    concurrency: int = Field(4, ge=1, le=256, description="Concurrent requests across all workers (at most 256).")
     cache_dir: str | None = Field(None, description="Response cache folder; None = <cache>/llm.")
     json_mode: bool = Field(True, description="Ask for response_format json_object (dropped silently when the "
                                               "server rejects it).")
-    max_failures: int = Field(3, ge=1, description="Consecutive endpoint failures (after retries) before the LLM "
+    max_failures: int = Field(3, ge=1, le=1000, description="Consecutive endpoint failures (after retries, at most "
+                                                            "1000) before the LLM "
                                                    "is skipped for 5 minutes and the rules take over.")
     prompt_dir: str | None = Field(None, description="Folder of edited prompt templates overriding the built-in "
                                                      "ones file by file; None = built-in.")
@@ -235,7 +261,7 @@ class GenerateConfig(_Section):
 
     preset: str = Field("assist3d", description="Generator preset: assist3d, randomrooms, holodeck-style, no-context, "
                                                 "or an ablation preset.")
-    seed: int = Field(0, description="Global seed; scene k uses scene_seed(seed, k).")
+    seed: int = Field(0, ge=0, le=2**32 - 1, description="Global seed, 0..2^32-1; scene k uses scene_seed(seed, k).")
     assets: AssetsConfig = Field(default_factory=AssetsConfig)
     room: RoomConfig = Field(default_factory=RoomConfig)
     selection: SelectionConfig = Field(default_factory=SelectionConfig)

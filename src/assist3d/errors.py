@@ -81,3 +81,83 @@ def shown(text: object, limit: int = 200, *, markup: bool = False) -> str:
 
         result = escape(result)
     return result
+
+
+# ------------------------------------------------------------------------------------------------
+# Faults of the machine (disk full, read-only, permissions, a file where a folder is expected)
+
+
+class FaultError(AssistError):
+    """The operating system refused a read or a write; the message names the path and a way on."""
+
+
+#: errno -> (what happened, what to do). Filled lazily so the module imports nothing at start.
+_FAULTS: dict[int, tuple[str, str]] = {}
+
+
+def _fault_table() -> dict[int, tuple[str, str]]:
+    import errno as e
+
+    if not _FAULTS:
+        _FAULTS.update({
+            e.ENOSPC: ("no space left on the device", "free some space or choose another folder"),
+            e.EDQUOT: ("disk quota exceeded", "free some space or choose another folder"),
+            e.EFBIG: ("file too large for this file system", "choose a folder on another file system"),
+            e.EROFS: ("read-only file system", "choose a writable folder"),
+            e.EACCES: ("permission denied", "check the permissions or choose another folder"),
+            e.EPERM: ("operation not permitted", "check the permissions or choose another folder"),
+            e.EISDIR: ("is a folder, expected a file", "give a file path"),
+            e.ENOTDIR: ("not a folder", "remove the file or choose another path"),
+            e.EEXIST: ("already exists", "remove it or choose another path"),
+            e.ENOENT: ("not found", "check the path"),
+            e.ENAMETOOLONG: ("file name too long", "choose a shorter path"),
+            e.ELOOP: ("too many levels of symbolic links", "check the links on the path"),
+            e.EMFILE: ("too many open files", "raise the limit (ulimit -n) or use fewer workers"),
+            e.ENFILE: ("too many open files in the system", "close other programs or use fewer workers"),
+            e.EIO: ("input/output error", "check the disk or network file system"),
+            e.EBUSY: ("device or resource busy", "wait a moment"),
+        })
+    return _FAULTS
+
+
+def _file_on_path(path: str) -> str | None:
+    """The first part of ``path`` (itself or a parent) that exists and is not a folder."""
+    import os
+
+    p = os.path.abspath(path)
+    while True:
+        if os.path.lexists(p) and not os.path.isdir(p):
+            return p
+        parent = os.path.dirname(p)
+        if parent == p:
+            return None
+        p = parent
+
+
+def _what_and_advice(err: OSError) -> tuple[str, str]:
+    return _fault_table().get(err.errno or -1, (inert(err.strerror or type(err).__name__), "check the path"))
+
+
+def fault_advice(err: OSError) -> str:
+    """What to do about ``err`` (``"free some space or choose another folder"``)."""
+    return _what_and_advice(err)[1]
+
+
+def describe_os_error(err: OSError, *, advice: bool = True) -> str:
+    """One line for an :class:`OSError`: the path, what happened and (``advice``) what to do.
+
+    ``ENOTDIR`` / ``EEXIST`` name the part of the path that is a file; ``EISDIR`` from a rename
+    names the target. Paths are shown inert (see :func:`shown`)."""
+    import errno as e
+
+    what, todo = _what_and_advice(err)
+    tail = f"; {todo}" if advice else ""
+    path = err.filename2 if err.errno == e.EISDIR and err.filename2 is not None else err.filename
+    if path is not None and err.errno in (e.ENOTDIR, e.EEXIST):
+        blocker = _file_on_path(str(path))
+        if blocker is not None:
+            tail = "; remove the file or choose another path" if advice else ""
+            return f"{shown(blocker, 400)}: is a file where a folder is expected{tail}"
+    if path is None:
+        return f"{what}{tail}"
+    return f"{shown(path, 400)}: {what}{tail}"

@@ -12,6 +12,8 @@ from typing import Any, Iterator
 
 import numpy as np
 
+from .errors import DataError, shown
+
 
 def _default_mode() -> int:
     mask = os.umask(0)
@@ -27,8 +29,14 @@ _FILE_MODE = _default_mode()
 def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it over ``path`` only if the block succeeds."""
     path = Path(path)
+    if path.exists() and not path.is_file() and not path.is_dir():  # a folder: EISDIR at the rename
+        # renaming over a device (/dev/null, /dev/full) would replace it, for root
+        raise DataError(f"{shown(path, 400)}: is not a regular file (a device, pipe or socket); give a file path")
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as e:  # name the file the user asked for, not the temporary one
+        raise type(e)(e.errno, e.strerror, str(path)) from None
     os.close(fd)
     tmp_path = Path(tmp)
     try:
@@ -38,8 +46,10 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     try:
         yield tmp_path
         os.replace(tmp_path, path)
-    except BaseException:
+    except BaseException as e:
         tmp_path.unlink(missing_ok=True)
+        if isinstance(e, OSError) and e.filename is None:  # e.g. ENOSPC from write(): say which file
+            e.filename = str(path)
         raise
 
 

@@ -22,7 +22,8 @@ from typing import Callable, Iterable, Iterator
 import numpy as np
 
 from .config import GenerateConfig, config_to_dict, dump_config
-from .errors import AssistError, ConfigError
+from .bounds import MAX_WORKERS, check_render_memory, check_scene_indices
+from .errors import AssistError, ConfigError, FaultError, describe_os_error, fault_advice, shown
 from .export import Manifest, read_scene_meta, write_scene
 from .export.writer import remove_stale_temps
 from .interrupts import Interrupted, worker_pool
@@ -235,19 +236,25 @@ def generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int
                                  on_start=on_start)
     except Interrupted as e:
         raise Interrupted(e.signum, _progress_line(Path(out), indices, cfg.seed)) from None
+    except OSError as e:  # disk full, read-only, permissions: say what is complete and how to go on
+        done, total = _complete(Path(out), indices, cfg.seed)
+        raise FaultError(f"{describe_os_error(e, advice=False)}; {done} of {total} scenes complete in "
+                         f"{shown(out, 400)}; {fault_advice(e)}, then re-run the same command to resume") from None
 
 
 def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int], *, workers: int,
                       verify: bool, on_scene: Callable[[dict, bool], None] | None,
                       on_start: Callable[[int, int], None] | None) -> DatasetRun:
-    if workers < 1:
-        raise ConfigError(f"--workers must be >= 1, got {workers}")
+    if not 1 <= workers <= MAX_WORKERS:
+        raise ConfigError(f"--workers must be 1..{MAX_WORKERS}, got {workers}")
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out {out}: exists and is not a folder")
     indices = sorted(set(int(i) for i in indices))
     if any(i < 0 for i in indices):
         raise ConfigError("scene indices must be >= 0")
+    check_scene_indices(indices)
+    check_render_memory(cfg, workers=min(workers, len(indices)) or 1)  # before any work starts
     for var in THREAD_ENV:
         os.environ.setdefault(var, "1")
     cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
@@ -322,7 +329,7 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
                 _run_in_process(gen, jobs, done, fail)
             elif jobs:
                 _run_in_pool(jobs, workers, cfg_dict, threads, done, fail)
-        except Interrupted:
+        except (Interrupted, OSError):  # half-written scenes go (freeing their space), complete ones stay
             _discard_unfinished(out, todo)
             raise
         return DatasetRun(out, indices, skipped, generated, manifest, failed, errors)
@@ -357,23 +364,32 @@ def _run_in_pool(jobs: list[SceneJob], workers: int, cfg_dict: dict, threads: in
 
 
 def _discard_unfinished(out: Path, indices: Iterable[int]) -> None:
-    """After an interrupt: remove the half-written folders of scenes ``indices`` (no completion
-    marker) and temporary files in ``out``; complete scenes stay."""
-    for i in indices:
-        d = out / scene_name(i)
-        if d.is_dir() and read_scene_meta(d, check_files=False) is None:
-            shutil.rmtree(d, ignore_errors=True)
-    remove_stale_temps(out)
+    """After an interrupt or a fault: remove the half-written folders of scenes ``indices`` (no
+    completion marker) and temporary files in ``out``; complete scenes stay."""
+    try:
+        for i in indices:
+            d = out / scene_name(i)
+            if d.is_dir() and read_scene_meta(d, check_files=False) is None:
+                shutil.rmtree(d, ignore_errors=True)
+        remove_stale_temps(out)
+    except OSError:  # a read-only folder: what is left is incomplete and redone on resume
+        pass
 
 
-def _progress_line(out: Path, indices: list[int], seed: int) -> str:
-    """``"3 of 20 scenes complete in OUT; re-run the same command to resume"``, read from disk."""
+def _complete(out: Path, indices: list[int], seed: int) -> tuple[int, int]:
+    """(complete scenes of ``indices`` in ``out``, read from disk; how many were asked for)."""
     wanted = {int(i) for i in indices}
     complete = 0
     for i in wanted:
         meta = read_scene_meta(out / scene_name(i), check_files=False)
         complete += meta is not None and meta.get("seed") == scene_seed(seed, i)
-    return f"{complete} of {len(wanted)} scenes complete in {out}; re-run the same command to resume"
+    return complete, len(wanted)
+
+
+def _progress_line(out: Path, indices: list[int], seed: int) -> str:
+    """``"3 of 20 scenes complete in OUT; re-run the same command to resume"``, read from disk."""
+    complete, total = _complete(out, indices, seed)
+    return f"{complete} of {total} scenes complete in {shown(out, 400)}; re-run the same command to resume"
 
 
 def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, out: str | None = None,
@@ -393,6 +409,7 @@ def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, 
 
     if cfg is None:
         cfg = parse_config({"seed": seed, "assets": {"library": assets}})
+    check_render_memory(cfg)
     t0 = time.perf_counter()
     gen = Generator(cfg)
     catalog_s = time.perf_counter() - t0

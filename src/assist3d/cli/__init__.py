@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import errno
 import logging
 import os
 import sys
 
 import typer
 
-from ..errors import AssistError, inert
+from ..errors import AssistError, FaultError, describe_os_error, inert
 
 app = typer.Typer(
     name="assist3d",
@@ -67,6 +68,23 @@ def _register_all() -> None:
 _register_all()
 
 
+#: How to go on after a fault, for the commands that keep their finished work (``generate``'s own
+#: message counts its complete scenes).
+_RESUME_HINTS = {
+    "probe": "re-run the same command to resume (finished seeds are kept)",
+    "train": "re-run with --resume to continue from the last checkpoint",
+}
+
+
+#: Faults that strike part-way through a run (the others, a read-only or misplaced --out, come first).
+_MID_RUN_FAULTS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO})
+
+
+def _command_name(argv: list[str]) -> str | None:
+    """The subcommand of a command line (the first word that is not an option)."""
+    return next((a for a in argv[1:] if not a.startswith("-")), None)
+
+
 def main() -> None:
     from ..interrupts import Interrupted, exit_on_signals
 
@@ -74,9 +92,18 @@ def main() -> None:
     try:
         with exit_on_signals():
             app()
-    except AssistError as e:
+    except AssistError as e:  # a bad input (2), or a fault of the machine met by a writer (1)
         logging.getLogger("assist3d").error(str(e))
-        sys.exit(2)
+        sys.exit(1 if isinstance(e, FaultError) else 2)
+    except OSError as e:  # disk full, read-only, permissions, a file where a folder is expected
+        hint = _RESUME_HINTS.get(_command_name(sys.argv)) if e.errno in _MID_RUN_FAULTS else None
+        logging.getLogger("assist3d").error(describe_os_error(e) + (f", then {hint}" if hint else ""))
+        sys.exit(1)
+    except MemoryError as e:  # the bounds and estimates should refuse first; the last safety net
+        detail = f" ({inert(e)})" if str(e) else ""
+        logging.getLogger("assist3d").error(f"not enough memory{detail}; lower the sizes that scale the work "
+                                            "(image size, views, points, counts) and re-run")
+        sys.exit(1)
     except Interrupted as e:  # workers stopped, temporary files removed, locks released: say what is done
         sys.stderr.write(f"assist3d: {inert(str(e))}\n")
         sys.stderr.flush()

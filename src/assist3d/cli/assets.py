@@ -17,10 +17,12 @@ from typing import Iterator, List, Optional
 
 import typer
 
+from ..bounds import MAX_SEED, MAX_WORKERS
 from ..errors import AssetError, ConfigError, shown
 from ..paths import ENV_ASSETS, resolve_library
 
 LIBRARY_HELP = f"Catalog folder (default: ${ENV_ASSETS}, else <cache>/assets)."
+MAX_PROCEDURAL = 100_000  # as AssetsConfig.procedural_count
 
 assets_app = typer.Typer(help="Asset catalogs: import Sweet Home 3D or mesh folders, build the procedural library, stats.",
                          no_args_is_help=True)
@@ -85,12 +87,20 @@ def _print_summary(title: str, report_json: dict, catalog, as_json: bool) -> Non
                   f"catalog now: {stats['assets']} assets, {stats['classes']} classes, groups {stats['groups']}")
 
 
+def _fail_if_nothing_imported(report_json: dict) -> None:
+    """An import that skipped every input is an error (exit 2), with the reasons printed above."""
+    skipped = report_json.get("skipped") or []
+    if report_json.get("total", 0) == 0 and skipped:
+        raise AssetError(f"nothing imported: all {len(skipped)} inputs were skipped (reasons above)")
+
+
 @import_app.command("sh3d")
 def import_sh3d_cmd(
     paths: Optional[List[Path]] = typer.Argument(None, help=".sh3f files, sweethome3d.jar or folders of .sh3f "
                                                           "(default: /usr/share/sweethome3d/furniture/*.sh3f + the jar)."),
     library: Optional[Path] = typer.Option(None, "--library", help=LIBRARY_HELP),
-    workers: int = typer.Option(0, "--workers", help="Worker processes (0 = one per CPU core, 1 = in-process)."),
+    workers: int = typer.Option(0, "--workers", min=0, max=MAX_WORKERS,
+                                help="Worker processes (0 = one per CPU core, 1 = in-process)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object (import report and stats) instead of tables."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar on stderr."),
 ) -> None:
@@ -106,6 +116,7 @@ def import_sh3d_cmd(
     with _progress_bar("sh3d", progress) as update:
         report = import_sh3d(catalog, paths or None, workers=workers or None, progress=update)
     _print_summary("Sweet Home 3D import", report.to_json(), catalog, as_json)
+    _fail_if_nothing_imported(report.to_json())
 
 
 @import_app.command("meshes")
@@ -115,7 +126,8 @@ def import_meshes_cmd(
                                                           "front, license, attribution (see docs/assets.md)."),
     name: Optional[str] = typer.Option(None, "--name", help="Collection name used in ids (default: the folder name)."),
     library: Optional[Path] = typer.Option(None, "--library", help=LIBRARY_HELP),
-    workers: int = typer.Option(0, "--workers", help="Worker processes (0 = one per CPU core, 1 = in-process)."),
+    workers: int = typer.Option(0, "--workers", min=0, max=MAX_WORKERS,
+                                help="Worker processes (0 = one per CPU core, 1 = in-process)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object instead of tables."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar on stderr."),
 ) -> None:
@@ -128,14 +140,17 @@ def import_meshes_cmd(
     with _progress_bar("meshes", progress) as update:
         report = import_meshes(catalog, folder, manifest, collection=name, workers=workers or None, progress=update)
     _print_summary("Mesh folder import", report.to_json(), catalog, as_json)
+    _fail_if_nothing_imported(report.to_json())
 
 
 @assets_app.command("procedural")
 def procedural_cmd(
-    count: int = typer.Option(2000, "--count", min=1, help="Number of procedural assets (default 2000)."),
-    seed: int = typer.Option(0, "--seed", help="Library seed: the same seed gives byte-identical meshes."),
+    count: int = typer.Option(2000, "--count", min=1, max=MAX_PROCEDURAL,
+                              help=f"Number of procedural assets (default 2000, at most {MAX_PROCEDURAL:,})."),
+    seed: int = typer.Option(0, "--seed", min=0, max=MAX_SEED,
+                             help="Library seed, 0..2^32-1: the same seed gives byte-identical meshes."),
     library: Optional[Path] = typer.Option(None, "--library", help=LIBRARY_HELP),
-    workers: int = typer.Option(0, "--workers", help="Worker processes (0 = one per CPU core)."),
+    workers: int = typer.Option(0, "--workers", min=0, max=MAX_WORKERS, help="Worker processes (0 = one per CPU core)."),
     as_json: bool = typer.Option(False, "--json", help="Print the catalog stats as one JSON object."),
 ) -> None:
     """Build the built-in procedural library into the catalog (replaces earlier procedural assets)."""

@@ -10,7 +10,8 @@ from typing import Optional
 
 import typer
 
-from ..errors import ConfigError, shown
+from ..bounds import MAX_WORKERS
+from ..errors import ConfigError, DataError, shown
 
 
 def register(app: typer.Typer) -> None:
@@ -45,7 +46,8 @@ def evaluate(
                                                                              "ScanNet v2) for out-of-domain AR."),
     feature: Optional[str] = typer.Option(None, "--feature", help="Shape feature for --ood-reference as MODULE:FUNCTION "
                                                                   "taking (n, 3) points (default: assist3d's shape descriptor)."),
-    workers: int = typer.Option(1, "--workers", "-w", min=1, help="Read and match scenes in this many processes."),
+    workers: int = typer.Option(1, "--workers", "-w", min=1, max=MAX_WORKERS,
+                                help=f"Read and match scenes in this many processes (at most {MAX_WORKERS})."),
 ) -> None:
     """Score instance predictions class-agnostically, exactly like the ScanNet benchmark script."""
     from rich.console import Console
@@ -105,5 +107,7 @@ def convert_predictions_cmd(
 
     if to not in ("txt", "npz"):
         raise ConfigError(f"--to {to!r}: expected 'txt' or 'npz'")
+    if not src.is_dir():
+        raise DataError(f"{shown(src, 400)}: prediction folder not found" + (" (it is a file)" if src.exists() else ""))
     n = convert_predictions(src, dst, to=to)
     typer.echo(json.dumps({"scenes": n, "to": to, "out": str(dst)}))

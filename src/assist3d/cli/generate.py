@@ -11,11 +11,13 @@ from typing import List, Optional
 
 import typer
 
+from ..bounds import MAX_SCENE_INDEX, MAX_SCENES, MAX_SEED, MAX_WORKERS, check_scene_indices
 from ..errors import ConfigError
 
 log = logging.getLogger("assist3d.cli.generate")
 
 STAGE_NAMES = ("select", "layout", "assemble", "render", "fuse", "write")
+MAX_BENCH_SCENES = 1000
 
 
 def _raw_config(path: Optional[Path]) -> dict:
@@ -84,9 +86,12 @@ def register(app: typer.Typer) -> None:
     @app.command()
     def generate(
         out: Path = typer.Option(..., "--out", "-o", help="Output dataset folder (created; resumed if it exists)."),
-        num_scenes: Optional[int] = typer.Option(None, "--num-scenes", "-n", min=1, help="Scenes 0..N-1."),
-        seed: Optional[int] = typer.Option(None, "--seed", help="Global seed (default: config, 0)."),
-        workers: int = typer.Option(1, "--workers", "-w", min=1, help="Worker processes."),
+        num_scenes: Optional[int] = typer.Option(None, "--num-scenes", "-n", min=1, max=MAX_SCENES,
+                                                 help=f"Scenes 0..N-1 (at most {MAX_SCENES:,} per run)."),
+        seed: Optional[int] = typer.Option(None, "--seed", min=0, max=MAX_SEED,
+                                           help="Global seed, 0..2^32-1 (default: config, 0)."),
+        workers: int = typer.Option(1, "--workers", "-w", min=1, max=MAX_WORKERS,
+                                    help=f"Worker processes (at most {MAX_WORKERS})."),
         config: Optional[Path] = typer.Option(None, "--config", "-c", help="YAML config file."),
         assets: Optional[Path] = typer.Option(None, "--assets", help="Asset catalog folder (default: the default "
                                                                        "catalog if imported, else the built-in "
@@ -98,8 +103,9 @@ def register(app: typer.Typer) -> None:
         llm_base_url: Optional[str] = typer.Option(None, "--llm-base-url", help="OpenAI-compatible endpoint."),
         llm_model: Optional[str] = typer.Option(None, "--llm-model", help="LLM model name."),
         only: Optional[List[int]] = typer.Option(None, "--only", help="Generate only scene K (repeatable)."),
-        start: int = typer.Option(0, "--start", min=0, help="First scene index (with --count)."),
-        count: Optional[int] = typer.Option(None, "--count", min=1, help="Number of scenes from --start."),
+        start: int = typer.Option(0, "--start", min=0, max=MAX_SCENE_INDEX, help="First scene index (with --count)."),
+        count: Optional[int] = typer.Option(None, "--count", min=1, max=MAX_SCENES,
+                                            help=f"Number of scenes from --start (at most {MAX_SCENES:,})."),
         verify: bool = typer.Option(False, "--verify", help="Re-cast rays and check every scene's labels."),
         as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
     ) -> None:
@@ -130,6 +136,7 @@ def register(app: typer.Typer) -> None:
             raise ConfigError("give --num-scenes N, --only K or --start S --count C")
         if not indices:
             raise ConfigError(f"no scenes selected (--start {start} is past --num-scenes {num_scenes})")
+        check_scene_indices(indices, what="--only" if only else "--start/--count/--num-scenes")
         log.info("generating %d scenes into %s (preset %s, seed %d, %d worker%s)", len(indices), out, cfg.preset,
                  cfg.seed, workers, "s" if workers > 1 else "")
         err = Console(stderr=True)
@@ -181,9 +188,10 @@ def register(app: typer.Typer) -> None:
 
     @app.command()
     def bench(
-        scenes: int = typer.Option(5, "--scenes", min=1, help="Scenes to generate (seeded, fixed)."),
+        scenes: int = typer.Option(5, "--scenes", min=1, max=MAX_BENCH_SCENES,
+                                   help=f"Scenes to generate (seeded, fixed; at most {MAX_BENCH_SCENES})."),
         assets: Optional[Path] = typer.Option(None, "--assets", help="Asset catalog folder."),
-        seed: int = typer.Option(0, "--seed", help="Global seed of the benchmark scenes."),
+        seed: int = typer.Option(0, "--seed", min=0, max=MAX_SEED, help="Global seed of the benchmark scenes."),
         keep: Optional[Path] = typer.Option(None, "--keep", help="Write the scenes here instead of a temp folder."),
         as_json: bool = typer.Option(False, "--json", help="Print JSON only."),
     ) -> None:

@@ -8,7 +8,10 @@ from typing import List, Optional
 
 import typer
 
+from ..bounds import MAX_SCENES, MAX_SEED
 from ..errors import shown
+
+MAX_CLUSTERS = 1000
 
 
 def register(app: typer.Typer) -> None:
@@ -26,8 +29,9 @@ def metrics(
                                                                      "comparable across runs."),
     save_codebook: Optional[Path] = typer.Option(None, "--save-codebook", help="Write the fitted codebook here."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Also write a PNG of per-dataset distributions."),
-    max_scenes: Optional[int] = typer.Option(None, "--max-scenes", help="Use at most this many scenes per dataset."),
-    seed: int = typer.Option(0, "--seed", help="Seed of point subsampling and the codebook."),
+    max_scenes: Optional[int] = typer.Option(None, "--max-scenes", min=1, max=MAX_SCENES,
+                                             help="Use at most this many scenes per dataset."),
+    seed: int = typer.Option(0, "--seed", min=0, max=MAX_SEED, help="Seed of point subsampling and the codebook."),
     llm_base_url: Optional[str] = typer.Option(None, "--llm-base-url", help="Also ask a vision-language model for a "
                                                                            "layout score (OpenAI-compatible)."),
     llm_model: Optional[str] = typer.Option(None, "--llm-model", help="Vision model name for --llm-base-url."),
@@ -70,8 +74,9 @@ def metrics(
 def cluster_assets_cmd(
     library: Optional[str] = typer.Option(None, "--library", help="Catalog folder (default: $ASSIST3D_ASSETS or the "
                                                                   "default catalog)."),
-    k: int = typer.Option(5, "--k", help="Number of shape clusters (paper: 5)."),
-    seed: int = typer.Option(0, "--seed", help="Seed of feature sampling and k-means."),
+    k: int = typer.Option(5, "--k", min=1, max=MAX_CLUSTERS, help=f"Number of shape clusters, 1..{MAX_CLUSTERS} "
+                                                                  "(paper: 5)."),
+    seed: int = typer.Option(0, "--seed", min=0, max=MAX_SEED, help="Seed of feature sampling and k-means."),
 ) -> None:
     """Compute per-asset shape features (cached) and k-means shape clusters for the geometry ablation."""
     from ..assets.catalog import Catalog

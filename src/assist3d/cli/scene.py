@@ -8,7 +8,8 @@ from typing import Optional
 
 import typer
 
-from ..errors import ConfigError, DataError
+from ..bounds import MAX_SCENE_INDEX, MAX_SEED
+from ..errors import ConfigError, DataError, shown
 
 
 def register(app: typer.Typer) -> None:
@@ -46,14 +47,16 @@ def layout_cmd(
     assets: Optional[str] = typer.Option(None, "--assets", help="Asset catalog folder (default: $ASSIST3D_ASSETS, "
                                                                 "the default catalog, or the built-in procedural "
                                                                 "library)."),
-    seed: int = typer.Option(0, "--seed", help="Scene seed: the same seed gives the same layout."),
+    seed: int = typer.Option(0, "--seed", min=0, max=MAX_SEED,
+                             help="Scene seed, 0..2^32-1: the same seed gives the same layout."),
     out: Path = typer.Option(..., "--out", help="Output folder for layout.json, scene.glb (and layout.png)."),
     png: bool = typer.Option(False, "--png", help="Also write a top-down picture layout.png."),
     config: Optional[Path] = typer.Option(None, "--config", help="YAML config file (see `assist3d generate`)."),
     preset: Optional[str] = typer.Option(None, "--preset", help="Generator preset: assist3d, randomrooms, "
                                                                 "holodeck-style, no-context, ablations..."),
-    scene_index: int = typer.Option(0, "--scene-index", help="Index of the scene in a dataset (picks the "
-                                                             "random or complementary selection strategy)."),
+    scene_index: int = typer.Option(0, "--scene-index", min=0, max=MAX_SCENE_INDEX,
+                                    help="Index of the scene in a dataset (picks the random or complementary "
+                                         "selection strategy)."),
     llm_base_url: Optional[str] = typer.Option(None, "--llm-base-url", help="OpenAI-compatible endpoint for the "
                                                                            "LLM relation planner."),
     llm_model: Optional[str] = typer.Option(None, "--llm-model", help="Model name for --llm-base-url."),
@@ -95,6 +98,18 @@ def layout_cmd(
                f"on-top {p['obj']}), {s['dropped']} dropped, {s['seconds']:.2f} s -> {out}")
 
 
+def _check_finite(layout, path: Path) -> None:
+    """Refuse a layout whose room or poses hold NaN or infinite numbers (a damaged or edited file)."""
+    import numpy as np
+
+    room = np.asarray(layout.room.polygon, dtype=float)
+    if not (np.isfinite(room).all() and np.isfinite(layout.room.height)):
+        raise DataError(f"{path}: the room polygon or height is not finite (NaN or infinite)")
+    for inst in layout.instances:
+        if not np.isfinite(np.asarray(inst.pose, dtype=float)).all():
+            raise DataError(f"{path}: instance {shown(inst.id, 80)} has a non-finite pose (NaN or infinite)")
+
+
 def layout_png_cmd(
     layout_json: Path = typer.Argument(..., help="A layout.json written by `assist3d layout` or `generate`."),
     assets: Optional[str] = typer.Option(None, "--assets", help="Asset catalog the layout was built from."),
@@ -112,7 +127,8 @@ def layout_png_cmd(
     except FileNotFoundError:
         raise DataError(f"{layout_json}: layout file not found") from None
     except (OSError, json.JSONDecodeError, KeyError, TypeError, ValueError) as e:
-        raise DataError(f"{layout_json}: not a readable layout.json ({type(e).__name__}: {e})") from None
+        raise DataError(f"{layout_json}: not a readable layout.json ({type(e).__name__}: {shown(e)})") from None
+    _check_finite(layout, layout_json)
     catalog = open_catalog(assets)
     render_topdown(layout, catalog, out, title=title)
     typer.echo(f"wrote {out}")

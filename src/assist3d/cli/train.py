@@ -9,7 +9,12 @@ from pathlib import Path
 
 import typer
 
+from ..bounds import MAX_THREADS
 from ..errors import ConfigError
+
+MAX_EPOCHS = 100_000
+MAX_TOP_K = 10_000
+MAX_BENCH_POINTS = 10_000_000  # 100 x the default; the paper's scenes have ~100k-300k points
 
 
 def _require_torch() -> None:
@@ -25,7 +30,8 @@ def register(app: typer.Typer) -> None:
                                        "training sets (repeatable; assist3d: defaults to synthetic, others to real)"),
         out: Path = typer.Option(Path("runs/train"), "--out", "-o", help="folder for checkpoints and metrics.csv"),
         resume: bool = typer.Option(False, "--resume", help="continue from OUT/last.pt"),
-        epochs: int = typer.Option(0, "--epochs", help="override optim.epochs (0 = keep)"),
+        epochs: int = typer.Option(0, "--epochs", min=0, max=MAX_EPOCHS,
+                                   help=f"override optim.epochs (0 = keep; at most {MAX_EPOCHS:,})"),
         device: str = typer.Option("", "--device", help="override device: auto, cpu, cuda"),
     ) -> None:
         """Train the model; writes OUT/last.pt, OUT/epoch_NNNN.pt, OUT/metrics.csv and OUT/config.yaml."""
@@ -63,7 +69,8 @@ def register(app: typer.Typer) -> None:
         checkpoint: Path = typer.Option(..., "--checkpoint", help="a *.pt written by `assist3d train`"),
         data: str = typer.Option(..., "--data", help="FORMAT:PATH of the scenes to segment"),
         out: Path = typer.Option(..., "--out", "-o", help="folder for <scene_id>.npz predictions"),
-        top_k: int = typer.Option(0, "--top-k", help="masks kept per scene (0 = the checkpoint config's)"),
+        top_k: int = typer.Option(0, "--top-k", min=0, max=MAX_TOP_K,
+                                  help=f"masks kept per scene (0 = the checkpoint config's; at most {MAX_TOP_K:,})"),
         dbscan: bool = typer.Option(None, "--dbscan/--no-dbscan", help="split masks with DBSCAN (default: config)"),
         device: str = typer.Option("auto", "--device", help="auto, cpu or cuda"),
     ) -> None:
@@ -81,12 +88,15 @@ def register(app: typer.Typer) -> None:
 
     @app.command("model-bench")
     def model_bench_cmd(
-        points: int = typer.Option(100_000, "--points", help="points in the synthetic scene"),
+        points: int = typer.Option(100_000, "--points", min=1, max=MAX_BENCH_POINTS,
+                                   help=f"points in the synthetic scene (at most {MAX_BENCH_POINTS:,})"),
         backend: str = typer.Option("torch", "--backend", help="torch or spconv"),
         device: str = typer.Option("cpu", "--device", help="cpu or cuda"),
         config: Path = typer.Option(None, "--config", help="model config (default: the paper model)"),
-        repeats: int = typer.Option(3, "--repeats", help="timed runs after one warm-up (median reported)"),
-        threads: int = typer.Option(0, "--threads", help="torch CPU threads (0 = the config's, else torch default)"),
+        repeats: int = typer.Option(3, "--repeats", min=1, max=1000,
+                                    help="timed runs after one warm-up (median reported; at most 1000)"),
+        threads: int = typer.Option(0, "--threads", min=0, max=MAX_THREADS,
+                                    help="torch CPU threads (0 = the config's, else torch default)"),
         as_json: bool = typer.Option(False, "--json", help="print JSON instead of a table"),
     ) -> None:
         """Forward and forward+backward time and peak memory of the model on one scene."""

@@ -13,7 +13,7 @@ from typing import Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from ..errors import ConfigError
+from ..errors import ConfigError, shown
 
 
 class _Section(BaseModel):
@@ -38,8 +38,9 @@ class ModelConfig(_Section):
     shared: bool = Field(True, description="share layer weights across passes (paper true)")
     sample_sizes: tuple[int, int, int, int] = Field((200, 800, 3200, 12800),
                                                     description="keys sampled per level in training")
-    num_queries: int = Field(100, description="queries in training (paper 100)")
-    num_queries_eval: int = Field(150, description="queries at inference (paper 150 on ScanNet)")
+    num_queries: int = Field(100, ge=1, le=10_000, description="queries in training, at most 10,000 (paper 100)")
+    num_queries_eval: int = Field(150, ge=1, le=10_000, description="queries at inference, at most 10,000 (paper 150 "
+                                                                    "on ScanNet)")
     backend: Literal["torch", "spconv"] = Field("torch", description="sparse conv backend")
 
 
@@ -57,9 +58,10 @@ class DataSpec(_Section):
 
 class DataConfig(_Section):
     train: list[DataSpec] = Field(default_factory=list, description="training sets")
-    voxel_size: float = Field(0.02, description="voxel edge in metres (paper 0.02)")
+    voxel_size: float = Field(0.02, ge=0.005, le=1, description="voxel edge in metres, 0.005..1 (paper 0.02)")
     synthetic_alpha: float = Field(0.5, description="weight of the synthetic loss (paper 0.5)")
-    max_points: int = Field(0, description="random crop to this many points per scene (0 = no crop)")
+    max_points: int = Field(0, ge=0, le=100_000_000, description="random crop to this many points per scene "
+                                                                 "(0 = no crop; at most 100,000,000)")
     cache_scenes: bool = Field(False, description="keep every loaded scene in memory (small datasets)")
 
 
@@ -83,21 +85,22 @@ class LossConfig(_Section):
     dice_weight: float = Field(2.0, description="dice weight (paper 2)")
     no_object_weight: float = Field(0.1, description="weight of unmatched queries in objectness BCE (paper 0.1)")
     aux: bool = Field(True, description="auxiliary losses after every decoder layer")
-    num_points: int = Field(0, description="voxels sampled per scene for matching/losses (0 = all)")
+    num_points: int = Field(0, ge=0, le=100_000_000, description="voxels sampled per scene for matching/losses "
+                                                                 "(0 = all; at most 100,000,000)")
 
 
 class OptimConfig(_Section):
     lr: float = Field(1e-4, description="AdamW peak learning rate (paper 1e-4)")
     weight_decay: float = Field(0.01, description="AdamW weight decay")
-    epochs: int = Field(600, description="epochs (paper 600)")
-    batch_size: int = Field(5, description="scenes per step per process (Mask3D 5)")
+    epochs: int = Field(600, ge=1, le=100_000, description="epochs, at most 100,000 (paper 600)")
+    batch_size: int = Field(5, ge=1, le=1024, description="scenes per step per process, at most 1024 (Mask3D 5)")
     pct_start: float = Field(0.3, description="OneCycleLR warm-up fraction")
     grad_clip: float = Field(0.0, description="gradient norm clip (0 = off)")
     amp: bool = Field(True, description="mixed precision on CUDA (ignored on CPU)")
 
 
 class PredictConfig(_Section):
-    top_k: int = Field(100, description="masks kept per scene")
+    top_k: int = Field(100, ge=1, le=10_000, description="masks kept per scene (at most 10,000)")
     dbscan: bool = Field(False, description="split masks into DBSCAN clusters")
     dbscan_eps: float = Field(0.95, description="DBSCAN radius in metres (Mask3D ScanNet 0.95)")
     dbscan_min_points: int = Field(1, description="DBSCAN core point neighbour count")
@@ -105,10 +108,11 @@ class PredictConfig(_Section):
 
 
 class TrainConfig(_Section):
-    seed: int = Field(0, description="global seed")
+    seed: int = Field(0, ge=0, le=2**32 - 1, description="global seed, 0..2^32-1")
     device: str = Field("auto", description="auto, cpu or cuda")
-    checkpoint_every: int = Field(10, description="epochs between numbered checkpoints (last.pt every epoch)")
-    threads: int = Field(0, description="torch CPU threads (0 = torch default)")
+    checkpoint_every: int = Field(10, ge=1, le=100_000, description="epochs between numbered checkpoints (last.pt "
+                                                                    "every epoch)")
+    threads: int = Field(0, ge=0, le=256, description="torch CPU threads (0 = torch default; at most 256)")
     model: ModelConfig = Field(default_factory=ModelConfig)
     data: DataConfig = Field(default_factory=DataConfig)
     augment: AugmentConfig = Field(default_factory=AugmentConfig)
@@ -121,7 +125,18 @@ def parse_train_config(data: dict, source: str = "<dict>") -> TrainConfig:
     try:
         return TrainConfig.model_validate(data or {})
     except ValidationError as e:
-        raise ConfigError(f"{source}: invalid training config:\n{e}") from None
+        raise ConfigError(f"{source}: invalid training config: {_brief(e)}") from None
+
+
+def _brief(err: ValidationError) -> str:
+    """``"optim.batch_size: Input should be less than or equal to 1024 (got 1000000000); ..."``."""
+    parts = []
+    for e in err.errors():
+        loc = ".".join(str(p) for p in e["loc"]) or "(top level)"
+        value = e.get("input")
+        got = f" (got {shown(repr(value), 60)})" if isinstance(value, (int, float, str, bool)) else ""
+        parts.append(f"{loc}: {e['msg']}{got}")
+    return "; ".join(parts)
 
 
 def load_train_config(path: str | Path) -> TrainConfig:

@@ -11,6 +11,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import DataError
+
+
+class VoxelGridError(DataError, ValueError):
+    """A scene too large for the voxel grid at this voxel size (a ValueError, as before)."""
+
 # ScanNet colour statistics (0-1 range), the usual normalisation of Mask3D-style models.
 COLOR_MEAN = np.array([0.47793125906962, 0.4303257521323044, 0.3749598901421883], dtype=np.float32)
 COLOR_STD = np.array([0.2834475483823543, 0.27566157565723015, 0.27018971370874995], dtype=np.float32)
@@ -39,8 +45,8 @@ def voxelize(coord: np.ndarray, color: np.ndarray, instance: np.ndarray | None, 
     grid = np.floor(coord.astype(np.float64) / voxel_size).astype(np.int64)
     grid -= grid.min(0)
     if grid.max() >= 2 ** 15:
-        raise ValueError(f"scene spans {grid.max()} voxels along an axis; the limit is {2 ** 15} "
-                         f"(enlarge voxel_size or crop the scene)")
+        raise VoxelGridError(f"scene spans {grid.max()} voxels of {voxel_size} m along an axis; the limit is "
+                             f"{2 ** 15} (enlarge voxel_size or crop the scene)")
     keys = (grid[:, 0] << 32) | (grid[:, 1] << 16) | grid[:, 2]
     ukeys, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
     inverse = inverse.reshape(-1)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import io
 import logging
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -60,8 +61,8 @@ def load_predictions(path: str | Path, n_points: int | None = None) -> tuple[np.
             if "masks" not in z or "scores" not in z:
                 raise DataError(f"{path}: expected keys 'masks' and 'scores', found {sorted(z.files)}")
             masks, scores = z["masks"], z["scores"]
-    except (ValueError, OSError, EOFError) as e:
-        raise DataError(f"{path}: cannot read prediction npz ({e})") from None
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as e:  # a truncated .npz is a bad zip
+        raise DataError(f"{path}: cannot read prediction npz ({shown(e)})") from None
     if masks.ndim == 1 and masks.size == 0:
         masks = masks.reshape(0, n_points or 0)
     return _validated(path, masks, scores, n_points)

@@ -12,6 +12,7 @@ in nats; the maximum is ln K (K = 64 codes: 4.16).
 
 from __future__ import annotations
 
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -19,7 +20,7 @@ import numpy as np
 from scipy.cluster.vq import kmeans2
 from scipy.spatial import cKDTree
 
-from ..errors import DataError
+from ..errors import DataError, shown
 from ..fileio import write_npz_atomic
 
 DEFAULT_CODES = 64
@@ -46,10 +47,10 @@ class Codebook:
     @staticmethod
     def load(path: str | Path) -> "Codebook":
         try:
-            with np.load(path) as z:
+            with np.load(path, allow_pickle=False) as z:
                 return Codebook(z["centers"], z["mean"], z["scale"])
-        except (OSError, KeyError, ValueError) as e:
-            raise DataError(f"{path}: not a codebook file ({e})") from None
+        except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as e:  # truncated: a bad zip
+            raise DataError(f"{path}: not a codebook file ({shown(e)})") from None
 
 
 def fit_codebook(features: np.ndarray, *, k: int = DEFAULT_CODES, rng: np.random.Generator) -> Codebook:
