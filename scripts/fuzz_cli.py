@@ -127,36 +127,11 @@ def kill_group(pgid: int) -> None:
 # processes below a pid (for "no process outlives the run")
 
 
-def _stat(pid: int) -> list[str] | None:
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    except (OSError, IndexError):
-        return None
-
-
-def descendants(root: int) -> dict[int, str]:
-    children: dict[int, list[int]] = {}
-    for p in Path("/proc").iterdir():
-        if p.name.isdigit() and (st := _stat(int(p.name))) is not None:
-            children.setdefault(int(st[1]), []).append(int(p.name))
-    found: dict[int, str] = {}
-    todo = list(children.get(root, []))
-    while todo:
-        pid = todo.pop()
-        if (st := _stat(pid)) is not None:
-            found[pid] = st[19]
-            todo.extend(children.get(pid, []))
-    return found
+from assist3d.testing import descendants, wait_until_gone  # noqa: E402
 
 
 def survivors(procs: dict[int, str], wait_s: float = 5.0) -> list[int]:
-    deadline = time.monotonic() + wait_s
-    while True:
-        alive = [pid for pid, start in procs.items()
-                 if (st := _stat(pid)) is not None and st[19] == start and st[0] not in ("Z", "X")]
-        if not alive or time.monotonic() > deadline:
-            return alive
-        time.sleep(0.05)
+    return wait_until_gone(procs, wait_s)
 
 
 # ------------------------------------------------------------------------------------------------

@@ -8,7 +8,6 @@ where the machine forbids them; ``/dev/full`` stands in for a full disk everywhe
 from __future__ import annotations
 
 import errno
-import hashlib
 import json
 import os
 import re
@@ -30,6 +29,7 @@ from assist3d.errors import ConfigError, DataError, FaultError, describe_os_erro
 from assist3d.export import read_scene_meta
 from assist3d.fileio import atomic_path, write_bytes_atomic
 from assist3d.pipeline import generate_dataset, scene_name
+from assist3d.testing import dataset_digest
 from test_generate_pipeline import TINY
 
 LINUX = sys.platform.startswith("linux")
@@ -41,19 +41,7 @@ GIB = 2**30
 # helpers
 
 
-def digest(root: Path) -> dict[str, str]:
-    """One hash per complete scene over its arrays and layout (timings left out)."""
-    out = {}
-    for d in sorted(root.glob("scene_*")):
-        h = hashlib.sha256()
-        for name in ("coord.npy", "color.npy", "normal.npy", "instance.npy", "segment.npy"):
-            h.update((d / name).read_bytes())
-        lay = json.loads((d / "layout.json").read_text())
-        lay.pop("seconds", None)
-        lay.get("stats", {}).pop("timing", None)
-        h.update(json.dumps(lay, sort_keys=True).encode())
-        out[d.name] = h.hexdigest()
-    return out
+digest = dataset_digest
 
 
 def cli(*args: str, prefix: tuple[str, ...] = (), timeout: float = 120) -> subprocess.CompletedProcess:

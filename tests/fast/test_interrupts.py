@@ -4,8 +4,6 @@ what is complete, and a re-run completes the dataset with the bytes of an uninte
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
 import re
 import signal
@@ -21,6 +19,7 @@ from assist3d.config import parse_config
 from assist3d.export import read_scene_meta
 from assist3d.interrupts import Interrupted, worker_pool
 from assist3d.pipeline import generate_dataset, scene_name
+from assist3d.testing import dataset_digest, descendants, wait_until_gone
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"),
                                 reason="needs Linux: /proc to find worker processes, POSIX signals")
@@ -34,65 +33,9 @@ TINY = {
     "render": {"width": 80, "height": 60, "fx": 72.2, "fy": 72.2, "vantage_points": 2, "views_per_point": 6},
 }
 N_SCENES = 6
-ARRAYS = ("coord.npy", "color.npy", "normal.npy", "instance.npy", "segment.npy")
 
 
 # ------------------------------------------------------------------------------------ helpers
-
-
-def dataset_digest(root: Path) -> dict[str, str]:
-    """One hash per scene over its arrays and its layout (wall-clock timings left out)."""
-    out = {}
-    for d in sorted(root.glob("scene_*")):
-        h = hashlib.sha256()
-        for name in ARRAYS:
-            h.update((d / name).read_bytes())
-        lay = json.loads((d / "layout.json").read_text())
-        lay.pop("seconds", None)
-        lay.get("stats", {}).pop("timing", None)
-        h.update(json.dumps(lay, sort_keys=True).encode())
-        out[d.name] = h.hexdigest()
-    return out
-
-
-def _stat(pid: int) -> list[str] | None:
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    except (OSError, IndexError):
-        return None
-
-
-def descendants(root: int) -> dict[int, str]:
-    """Every live process below ``root``: pid -> start time (so a reused pid is not confused)."""
-    children: dict[int, list[int]] = {}
-    for p in Path("/proc").iterdir():
-        if p.name.isdigit() and (st := _stat(int(p.name))) is not None:
-            children.setdefault(int(st[1]), []).append(int(p.name))
-    found: dict[int, str] = {}
-    todo = list(children.get(root, []))
-    while todo:
-        pid = todo.pop()
-        if (st := _stat(pid)) is not None:
-            found[pid] = st[19]
-            todo.extend(children.get(pid, []))
-    return found
-
-
-def survivors(procs: dict[int, str]) -> list[int]:
-    """The processes of ``procs`` still running (a zombie has exited)."""
-    alive = []
-    for pid, start in procs.items():
-        st = _stat(pid)
-        if st is not None and st[19] == start and st[0] not in ("Z", "X"):
-            alive.append(pid)
-    return alive
-
-
-def wait_until_gone(procs: dict[int, str], timeout: float) -> list[int]:
-    deadline = time.monotonic() + timeout
-    while (alive := survivors(procs)) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    return alive
 
 
 def _default_sigint() -> None:
