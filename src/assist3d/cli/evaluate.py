@@ -45,7 +45,9 @@ def evaluate(
     ood_reference: Optional[str] = typer.Option(None, "--ood-reference", help="Reference dataset FORMAT:PATH (the paper: "
                                                                              "ScanNet v2) for out-of-domain AR."),
     feature: Optional[str] = typer.Option(None, "--feature", help="Shape feature for --ood-reference as MODULE:FUNCTION "
-                                                                  "taking (n, 3) points (default: assist3d's shape descriptor)."),
+                                                                  "taking (n, 3) points (default: assist3d's shape descriptor). "
+                                                                  "This imports and runs that Python code: name only "
+                                                                  "modules you trust."),
     workers: int = typer.Option(1, "--workers", "-w", min=1, max=MAX_WORKERS,
                                 help=f"Read and match scenes in this many processes (at most {MAX_WORKERS})."),
 ) -> None:
