@@ -19,7 +19,7 @@ from assist3d.cli import app  # noqa: E402
 from assist3d.config import parse_config  # noqa: E402
 from assist3d.data import open_dataset  # noqa: E402
 from assist3d.engine.toy import make_toy_scene  # noqa: E402
-from assist3d.errors import DataError  # noqa: E402
+from assist3d.errors import ConfigError, DataError  # noqa: E402
 from assist3d.evaluation.ap import match_scene, summarize  # noqa: E402
 from assist3d.models.sparse import SparseSceneNorm, sparse_tensor  # noqa: E402
 from assist3d.pipeline import generate_dataset  # noqa: E402
@@ -326,3 +326,12 @@ def test_segment_reads_reader_specs_and_reports_ap_when_labels_are_known(tmp_pat
         assert r.exit_code == 0, (spec, r.output)
         row = json.loads(r.stdout.strip().splitlines()[-1])
         assert row["scene"] == "room" and row["AP50"] > 0.7, (spec, row)
+
+
+def test_segmenter_config_sizes_have_bounds():
+    """Fields that size the network or its work are bounded (issue 17: every number has a bound)."""
+    for bad in ({"net": {"enc_channels": [16, 32, 64, 100_000]}}, {"net": {"dec_blocks": [1, 1, 1, 50]}},
+                {"optim": {"batch_size": 10_000}}, {"cluster": {"min_voxels": 10**9}}):
+        with pytest.raises(ConfigError):
+            parse_segmenter_config(bad)
+    assert parse_segmenter_config({"net": {"enc_channels": [16, 32, 64, 1024]}}).net.enc_channels[3] == 1024

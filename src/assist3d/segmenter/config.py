@@ -7,12 +7,15 @@ offset-shifted connected components for instances.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field, ValidationError
 
 from ..engine.config import _Section
 from ..errors import ConfigError
+
+Channels = Annotated[int, Field(ge=4, le=1024)]
+Blocks = Annotated[int, Field(ge=1, le=8)]
 
 
 class NetConfig(_Section):
@@ -21,10 +24,10 @@ class NetConfig(_Section):
     voxel_size: float = Field(0.05, gt=0.005, le=0.5, description="voxel edge in metres")
     use_color: bool = Field(False, description="append RGB to the geometric input features")
     stem_channels: int = Field(16, ge=4, le=256)
-    enc_channels: tuple[int, int, int, int] = Field((16, 32, 64, 96))
-    enc_blocks: tuple[int, int, int, int] = Field((1, 1, 1, 1))
-    dec_channels: tuple[int, int, int, int] = Field((96, 64, 48, 48))
-    dec_blocks: tuple[int, int, int, int] = Field((1, 1, 1, 1))
+    enc_channels: tuple[Channels, Channels, Channels, Channels] = Field((16, 32, 64, 96), description="4 to 1024 each")
+    enc_blocks: tuple[Blocks, Blocks, Blocks, Blocks] = Field((1, 1, 1, 1), description="1 to 8 each")
+    dec_channels: tuple[Channels, Channels, Channels, Channels] = Field((96, 64, 48, 48), description="4 to 1024 each")
+    dec_blocks: tuple[Blocks, Blocks, Blocks, Blocks] = Field((1, 1, 1, 1), description="1 to 8 each")
     norm: Literal["scene", "batch"] = Field("scene", description="scene: per-scene statistics; batch: BatchNorm")
 
 
@@ -50,7 +53,7 @@ class ClusterConfig(_Section):
 
     fg_threshold: float = Field(0.5, gt=0.0, lt=1.0, description="foreground probability threshold")
     radius: float = Field(0.07, gt=0.0, le=1.0, description="link radius on offset-shifted centres, metres")
-    min_voxels: int = Field(6, ge=1, description="drop clusters with fewer voxels")
+    min_voxels: int = Field(6, ge=1, le=100_000, description="drop clusters with fewer voxels")
 
 
 class OptimConfig(_Section):
