@@ -297,32 +297,39 @@ def parse_config(data: dict | None, *, source: str = "<dict>") -> GenerateConfig
         raise ConfigError(f"{source}: invalid configuration\n{_suggest(err, GenerateConfig)}") from None
 
 
-def load_config(path: str | Path | None, overrides: dict | None = None) -> GenerateConfig:
-    """Read a YAML config file (or defaults if ``path`` is None) and apply nested ``overrides``."""
+def read_config_file(path: str | Path) -> dict:
+    """The mapping in YAML file ``path``, validated on its own so an error names the file (a
+    preset or flags may still be merged over it: see :func:`assist3d.presets.compose`)."""
     import yaml
 
-    data: dict = {}
-    if path is not None:
-        p = Path(path)
-        if not p.is_file():
-            raise ConfigError(f"{p}: config file not found")
-        try:
-            loaded = yaml.safe_load(p.read_text(encoding="utf-8"))
-        except yaml.YAMLError as e:
-            raise ConfigError(f"{p}: not valid YAML ({e})") from None
-        if loaded is not None and not isinstance(loaded, dict):
-            raise ConfigError(f"{p}: expected a mapping at the top level, got {type(loaded).__name__}")
-        data = loaded or {}
+    p = Path(path)
+    if not p.is_file():
+        raise ConfigError(f"{p}: config file not found")
+    try:
+        loaded = yaml.safe_load(p.read_text(encoding="utf-8"))
+    except yaml.YAMLError as e:
+        raise ConfigError(f"{p}: not valid YAML ({e})") from None
+    if loaded is not None and not isinstance(loaded, dict):
+        raise ConfigError(f"{p}: expected a mapping at the top level, got {type(loaded).__name__}")
+    data = loaded or {}
+    parse_config(data, source=str(p))
+    return data
+
+
+def load_config(path: str | Path | None, overrides: dict | None = None) -> GenerateConfig:
+    """Read a YAML config file (or defaults if ``path`` is None) and apply nested ``overrides``."""
+    data = read_config_file(path) if path is not None else {}
     if overrides:
-        data = _merge(data, overrides)
+        data = merge_config(data, overrides)
     return parse_config(data, source=str(path) if path else "<defaults>")
 
 
-def _merge(base: dict, over: dict) -> dict:
+def merge_config(base: dict, over: dict) -> dict:
+    """``base`` with ``over`` merged in, nested mappings key by key (``over`` wins)."""
     out = dict(base)
     for k, v in over.items():
         if isinstance(v, dict) and isinstance(out.get(k), dict):
-            out[k] = _merge(out[k], v)
+            out[k] = merge_config(out[k], v)
         else:
             out[k] = v
     return out

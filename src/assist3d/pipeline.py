@@ -21,22 +21,20 @@ from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
+from .assets import class_list, open_catalog_for
 from .config import GenerateConfig, config_to_dict, dump_config
 from .bounds import MAX_WORKERS, check_render_memory, check_scene_indices
 from .errors import AssistError, ConfigError, FaultError, describe_os_error, fault_advice, shown
 from .export import Manifest, read_scene_meta, write_scene
 from .export.writer import remove_stale_temps
 from .interrupts import Interrupted, worker_pool
+from .records import STAGES, LLMUsage, SceneRecord, StageTimings, stage_timings
 from .rng import make_rng, scene_seed
 
 log = logging.getLogger(__name__)
 
-# LLM accounting copied from layout stats into each scene's marker and summed in the manifest
-LLM_STAT_KEYS = ("llm_calls", "cache_hits", "repairs", "prompt_tokens", "completion_tokens", "llm_seconds")
-
 __all__ = ["STAGES", "scene_name", "SceneJob", "Generator", "generate_dataset", "DatasetRun", "run_benchmark"]
 
-STAGES = ("select", "layout", "assemble", "render", "fuse", "write")
 _SCENE_RE = re.compile(r"^scene_(\d{6,})$")
 THREAD_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
@@ -57,13 +55,10 @@ class Generator:
     """Everything one process needs to generate scenes: the config and the opened catalog."""
 
     def __init__(self, cfg: GenerateConfig, *, threads: int | None = None) -> None:
-        from .assets import class_list, open_catalog
-
         self.cfg = cfg
         if threads is not None:
             self.cfg = cfg.model_copy(update={"render": cfg.render.model_copy(update={"threads": threads})})
-        a = cfg.assets
-        self.catalog = open_catalog(a.library, procedural_count=a.procedural_count, procedural_seed=a.procedural_seed)
+        self.catalog = open_catalog_for(cfg.assets)
         self.classes = class_list(self.catalog)
 
     @property
@@ -79,49 +74,48 @@ class Generator:
         cfg = self.cfg
         sid = scene_name(job.index)
         seed = scene_seed(cfg.seed, job.index)
-        seconds: dict[str, float] = {}
+        seconds = StageTimings()
         cpu0 = time.process_time()
         t0 = time.perf_counter()
         layout = build_layout(self.catalog, cfg, seed, scene_index=job.index)
         t_layout = time.perf_counter() - t0
         cpu = {"select+layout": time.process_time() - cpu0}
-        groups = sum(float(v) for v in (layout.stats.get("timing") or {}).values() if isinstance(v, (int, float)))
-        seconds["select"] = round(max(0.0, t_layout - groups), 4)  # room + selection + planning overhead
-        seconds["layout"] = round(t_layout - seconds["select"], 4)
+        seconds.select = float((layout.stats.get("timing") or {}).get("select", 0.0))  # planner, room, selection
+        seconds.layout = round(t_layout - seconds.select, 4)
         if not layout.classes:
             layout = _with_classes(layout, self.classes)
         t0 = time.perf_counter()
         mesh = assemble_scene(layout, self.catalog, self.classes)
-        seconds["assemble"] = round(time.perf_counter() - t0, 4)
+        seconds.assemble = round(time.perf_counter() - t0, 4)
         cpu["assemble"] = time.process_time() - cpu0 - cpu["select+layout"]
         caster = make_caster(cfg.render.backend, mesh.vertices, mesh.faces)
-        t_bvh = time.perf_counter() - t0 - seconds["assemble"]
+        t_bvh = time.perf_counter() - t0 - seconds.assemble
         res = render_point_cloud(mesh, layout.room, cfg.render, rng=make_rng(seed, "render"), scene_id=sid,
                                  caster=caster)
-        seconds["render"] = round(res.timings["render"] + t_bvh, 4)
-        seconds["fuse"] = res.timings["fuse"]
+        seconds.render = round(res.timings["render"] + t_bvh, 4)
+        seconds.fuse = res.timings["fuse"]
         cpu["render+fuse"] = time.process_time() - cpu0 - cpu["select+layout"] - cpu["assemble"]
-        meta = {
-            "id": sid, "index": job.index, "seed": seed, "dataset_seed": cfg.seed,
-            "instances": len(layout.instances),
-            "instances_with_points": int(np.count_nonzero(np.unique(res.sample.instance) >= 0)),
-            "dropped": len(layout.dropped), "planner": dict(layout.planner),
-            "vantage_points": [[round(float(v), 6) for v in c] for c in res.centers],
-            "render": res.stats, "triangles": int(len(mesh.faces)),
-            "llm": {k: v for k, v in ((k, layout.stats.get(k, (layout.stats.get("timing") or {}).get(k)))
-                                      for k in LLM_STAT_KEYS) if isinstance(v, (int, float))},
-        }
+        record = SceneRecord(
+            id=sid, index=job.index, seed=seed, dataset_seed=cfg.seed,
+            instances=len(layout.instances),
+            instances_with_points=int(np.count_nonzero(np.unique(res.sample.instance) >= 0)),
+            dropped=len(layout.dropped), planner=dict(layout.planner),
+            vantage_points=[[round(float(v), 6) for v in c] for c in res.centers],
+            render=res.stats, triangles=int(len(mesh.faces)),
+            llm=LLMUsage.from_layout_stats(layout.stats), seconds=seconds,
+            # CPU time of this process (all threads) per stage: a load-independent cost measure
+            cpu_seconds={k: round(v, 4) for k, v in cpu.items()},
+        )
         if job.verify:
             t0 = time.perf_counter()
             check = verify_labels(mesh, caster, res.sample, res.centers, pixel_counts=res.pixel_counts)
-            meta["check"] = {**check.to_json(), "ok": check.ok(), "seconds": round(time.perf_counter() - t0, 4)}
+            record.check = {**check.to_json(), "ok": check.ok(), "seconds": round(time.perf_counter() - t0, 4)}
             if not check.ok():
-                log.warning("%s: label check failed: %s", sid, meta["check"])
+                log.warning("%s: label check failed: %s", sid, record.check)
         glb = (lambda p: export_glb(layout, self.catalog, p)) if cfg.output.save_mesh else None
-        meta["seconds"] = seconds  # write_scene adds seconds["write"] before the marker goes out
-        # CPU time of this process (all threads) per stage: a load-independent cost measure
-        meta["cpu_seconds"] = {k: round(v, 4) for k, v in cpu.items()}
-        return write_scene(Path(job.out_dir) / sid, res.sample, layout, meta, ply=cfg.output.ply, glb_writer=glb)
+        # write_scene adds the file digests, the point count and seconds["write"] to the marker
+        return write_scene(Path(job.out_dir) / sid, res.sample, layout, record.to_json(), ply=cfg.output.ply,
+                           glb_writer=glb)
 
 
 def _with_classes(layout, classes):
@@ -263,11 +257,9 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
     if gen is not None:
         classes, assets_label = gen.classes, gen.assets_label
     else:
-        from .assets import class_list, open_catalog
         from .scene.planners import make_planner
 
-        cat = open_catalog(cfg.assets.library, procedural_count=cfg.assets.procedural_count,
-                           procedural_seed=cfg.assets.procedural_seed)
+        cat = open_catalog_for(cfg.assets)
         classes = class_list(cat)
         assets_label = str(getattr(cat, "root", "") or cfg.assets.library or "procedural")
         make_planner(cfg)  # says once, here, which planner the workers use
@@ -416,12 +408,12 @@ def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, 
     with tempfile.TemporaryDirectory(prefix="assist3d-bench-") as tmp:
         root = Path(out) if out else Path(tmp)
         metas = [gen.scene(SceneJob(i, str(root))) for i in range(scenes)]
-    totals = [sum(m["seconds"].values()) for m in metas]
+    totals = [stage_timings(m).total for m in metas]
     peak_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     return {
         "scenes": scenes,
         "seconds_per_scene": {"median": round(statistics.median(totals), 4), "max": round(max(totals), 4)},
-        "stages": {s: round(statistics.median(m["seconds"].get(s, 0.0) for m in metas), 4) for s in STAGES},
+        "stages": {s: round(statistics.median(stage_timings(m).get(s) for m in metas), 4) for s in STAGES},
         "peak_memory_mb": round(peak_kb / 1024.0, 1),
         "cpu_seconds_per_scene": round(statistics.median(sum(m["cpu_seconds"].values()) for m in metas), 4),
         "cpu_stages": {k: round(statistics.median(m["cpu_seconds"][k] for m in metas), 4)

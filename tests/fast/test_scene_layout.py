@@ -249,7 +249,7 @@ def test_cli_layout_and_layout_png(tmp_path):
 
 
 def test_cli_config_precedence(tmp_path):
-    from assist3d.cli.scene import compose_config
+    from assist3d.presets import compose as compose_config
     from assist3d.errors import ConfigError
 
     f = tmp_path / "c.yaml"

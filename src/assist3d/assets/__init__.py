@@ -7,13 +7,17 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..paths import ENV_ASSETS, cache_root, default_library
 from .catalog import Catalog
 
+if TYPE_CHECKING:
+    from ..config import AssetsConfig
+
 log = logging.getLogger(__name__)
 
-__all__ = ["Catalog", "open_catalog", "class_list", "procedural_library_dir"]
+__all__ = ["Catalog", "open_catalog", "open_catalog_for", "class_list", "procedural_library_dir"]
 
 
 def procedural_library_dir(count: int, seed: int) -> Path:
@@ -49,6 +53,12 @@ def open_catalog(library: str | Path | None = None, *, procedural_count: int = 2
         cat = Catalog.open(root)
     log.info("assets: built-in procedural library %s (%d assets)", root, len(cat))
     return cat
+
+
+def open_catalog_for(assets: AssetsConfig) -> Catalog:
+    """:func:`open_catalog` with the settings of a config's ``assets`` section."""
+    return open_catalog(assets.library, procedural_count=assets.procedural_count,
+                        procedural_seed=assets.procedural_seed)
 
 
 def _stale_procedural(cat: Catalog, count: int) -> bool:

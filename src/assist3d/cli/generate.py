@@ -13,41 +13,17 @@ import typer
 
 from ..bounds import MAX_SCENE_INDEX, MAX_SCENES, MAX_SEED, MAX_WORKERS, check_scene_indices
 from ..errors import ConfigError
+from ..records import STAGES, stage_timings
 
 log = logging.getLogger("assist3d.cli.generate")
 
-STAGE_NAMES = ("select", "layout", "assemble", "render", "fuse", "write")
 MAX_BENCH_SCENES = 1000
-
-
-def _raw_config(path: Optional[Path]) -> dict:
-    """The user's config file as a plain dict (validated), so presets can sit under it."""
-    if path is None:
-        return {}
-    import yaml
-
-    from ..config import load_config
-
-    load_config(path)  # validates and names the file on error
-    data = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
-    return data
-
-
-def build_config(config: Optional[Path], preset: Optional[str], overrides: dict):
-    """Preset < config file < command-line flags."""
-    from ..config import _merge
-    from ..presets import apply_preset
-
-    data = _merge(_raw_config(config), overrides)
-    name = preset or data.pop("preset", None) or "assist3d"
-    data.pop("preset", None)
-    return apply_preset(data, name)
 
 
 def _stage_means(metas: list[dict]) -> dict[str, float]:
     out = {}
-    for s in STAGE_NAMES:
-        vals = [float(m.get("seconds", {}).get(s, 0.0)) for m in metas]
+    for s in STAGES:
+        vals = [stage_timings(m).get(s) for m in metas]
         out[s] = statistics.fmean(vals) if vals else 0.0
     return out
 
@@ -73,9 +49,9 @@ def _summary_table(run, console) -> None:
     row("points / scene", [float(e.get("points", 0)) for e in entries], "{:,.0f}")
     row("dropped / scene", [float(e.get("dropped", 0)) for e in entries], "{:.1f}")
     fresh = run.generated
-    for s in STAGE_NAMES:
-        row(f"seconds: {s}", [float(m["seconds"].get(s, 0.0)) for m in fresh], "{:.3f}")
-    row("seconds: total", [sum(m["seconds"].values()) for m in fresh], "{:.3f}")
+    for s in STAGES:
+        row(f"seconds: {s}", [stage_timings(m).get(s) for m in fresh], "{:.3f}")
+    row("seconds: total", [stage_timings(m).total for m in fresh], "{:.3f}")
     checks = [m["check"] for m in fresh if "check" in m]
     if checks:
         row("label agreement", [c["agreement"] for c in checks], "{:.5f}")
@@ -115,6 +91,7 @@ def register(app: typer.Typer) -> None:
             TimeRemainingColumn
 
         from ..pipeline import generate_dataset
+        from ..presets import compose
 
         overrides: dict = {}
         if seed is not None:
@@ -125,7 +102,7 @@ def register(app: typer.Typer) -> None:
             overrides["output"] = {**({"save_mesh": True} if save_mesh else {}), **({"ply": True} if ply else {})}
         if llm_base_url or llm_model:
             overrides["llm"] = {k: v for k, v in (("base_url", llm_base_url), ("model", llm_model)) if v}
-        cfg = build_config(config, preset, overrides)
+        cfg = compose(config, preset, overrides)
         if only:
             indices = list(only)
         elif count is not None:

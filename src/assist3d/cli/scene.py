@@ -9,38 +9,12 @@ from typing import Optional
 import typer
 
 from ..bounds import MAX_SCENE_INDEX, MAX_SEED
-from ..errors import ConfigError, DataError, shown
+from ..errors import DataError, shown
 
 
 def register(app: typer.Typer) -> None:
     app.command("layout")(layout_cmd)
     app.command("layout-png")(layout_png_cmd)
-
-
-def _read_yaml(path: Path | None) -> dict:
-    if path is None:
-        return {}
-    import yaml
-
-    if not path.is_file():
-        raise ConfigError(f"{path}: config file not found")
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as e:
-        raise ConfigError(f"{path}: not valid YAML ({e})") from None
-    if data is not None and not isinstance(data, dict):
-        raise ConfigError(f"{path}: expected a mapping at the top level, got {type(data).__name__}")
-    return data or {}
-
-
-def compose_config(config: Path | None, preset: str | None, overrides: dict):
-    """Preset overrides, then the user's config file, then command-line overrides (last wins)."""
-    from ..config import _merge
-    from ..presets import apply_preset
-
-    data = _merge(_read_yaml(config), overrides)
-    name = preset or data.get("preset") or "assist3d"
-    return apply_preset(data, name)
 
 
 def layout_cmd(
@@ -64,8 +38,9 @@ def layout_cmd(
     as_json: bool = typer.Option(False, "--json", help="Print the summary as one JSON object."),
 ) -> None:
     """Build one scene's layout (no rendering): layout.json and scene.glb."""
-    from ..assets import open_catalog
+    from ..assets import open_catalog_for
     from ..fileio import write_json_atomic
+    from ..presets import compose
     from ..scene.layout import build_layout, layout_summary
 
     overrides: dict = {}
@@ -75,9 +50,8 @@ def layout_cmd(
         overrides.setdefault("llm", {})["base_url"] = llm_base_url
     if llm_model is not None:
         overrides.setdefault("llm", {})["model"] = llm_model
-    cfg = compose_config(config, preset, overrides)
-    catalog = open_catalog(cfg.assets.library, procedural_count=cfg.assets.procedural_count,
-                           procedural_seed=cfg.assets.procedural_seed)
+    cfg = compose(config, preset, overrides)
+    catalog = open_catalog_for(cfg.assets)
     layout = build_layout(catalog, cfg, seed, scene_index=scene_index)
     out.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out / "layout.json", layout.to_json())

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ..errors import DataError
 from ..fileio import write_json_atomic
+from ..records import manifest_entry
 
 log = logging.getLogger(__name__)
 
@@ -35,9 +36,9 @@ def versions() -> dict[str, str]:
 
 
 def scene_entry(meta: dict) -> dict:
-    """The manifest entry of a scene, from its completion marker."""
-    keys = ("id", "index", "seed", "instances", "points", "seconds", "dropped", "planner", "llm", "check")
-    return {k: meta[k] for k in keys if k in meta}
+    """The manifest entry of a scene, from its completion marker (the keys of
+    :data:`assist3d.records.MANIFEST_ENTRY_KEYS`)."""
+    return manifest_entry(meta)
 
 
 def llm_summary(scenes: list[dict]) -> dict:

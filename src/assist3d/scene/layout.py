@@ -28,6 +28,7 @@ from ..assets.catalog import Catalog
 from ..config import GenerateConfig
 from ..contracts import AssetRecord, DroppedObject, PlacedInstance, Relation, SceneLayout
 from ..errors import AssistError
+from ..records import PLAN_COUNTERS
 from ..rng import make_rng
 from .planners import make_planner
 from .relations import CROSS_GROUP, RELATIONS, GroupPlan, PlannedObject, Planner, PlanRequest, group_kind, relation_problem
@@ -38,7 +39,6 @@ from .selection import Selection, select_objects
 log = logging.getLogger(__name__)
 
 MAX_NOTES = 50
-SUMMED_PLAN_STATS = ("llm_calls", "cache_hits", "repairs", "prompt_tokens", "completion_tokens", "llm_seconds")
 
 
 def _placement_api() -> tuple[Callable, Callable]:
@@ -136,7 +136,7 @@ class _Run:
 
     def add_plan_stats(self, stats: dict) -> None:
         """Sum a planner call's counters (LLM calls, cache hits, tokens, seconds) into the layout's."""
-        for k in SUMMED_PLAN_STATS:
+        for k in PLAN_COUNTERS:
             v = stats.get(k)
             if isinstance(v, (int, float)):
                 self.plan_stats[k] += v
@@ -210,7 +210,8 @@ class _Run:
 def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_index: int = 0,
                  planner: Planner | None = None) -> SceneLayout:
     """One scene's layout. The same (catalog, cfg, seed, scene_index) gives the same layout
-    (timings aside). ``planner`` defaults to :func:`~assist3d.scene.planners.make_planner`."""
+    (timings aside: ``stats["timing"]`` holds wall seconds of the selection as ``"select"``, of
+    each group by its name and of LLM calls as ``"llm_seconds"``). ``planner`` defaults to :func:`~assist3d.scene.planners.make_planner`."""
     t0 = time.perf_counter()
     planner = planner if planner is not None else make_planner(cfg)
     room = sample_room(cfg.room, make_rng(seed, "room"))
@@ -221,6 +222,7 @@ def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_inde
     sel: Selection = select_objects(catalog, cfg.selection, make_rng(seed, "select"), scene_index=scene_index,
                                     propose=propose)
     run = _Run(catalog, cfg, seed, planner, room)
+    run.timing["select"] = round(time.perf_counter() - t0, 4)  # planner, room and selection
     room_llm = sel.stats.get("room_llm")
     if room_llm:  # the LLM's object plan counts with the planning calls
         run.add_plan_stats(room_llm)
