@@ -290,3 +290,35 @@ def test_holodeck_style_room_places_repeated_models(tmp_path):
         for s in stands:  # next to the bed, not somewhere in the room
             assert np.hypot(*(s.pose[:2, 3] - bed.pose[:2, 3])) < 2.0
         assert {i.class_name for i in lay.instances} <= {"bed", "nightstand", "picture", "book", "cup"}
+
+
+def test_one_set_of_plan_rules_the_repaired_plan_passes_the_strict_check_and_placement_agrees():
+    """review_plan is the only plan checker: what it repairs, validate_plan (the LLM repair loop)
+    accepts, and the placement engine's resolve_plan drops the same objects for the same reasons."""
+    from assist3d.contracts import PlacedInstance, Room
+    from assist3d.scene.placement.common import resolve_plan
+    from assist3d.scene.relations import review_plan, validate_plan
+
+    recs = tuple(AssetRecord(id=f"a{i}", source="t", name="x", class_name="x", groups=("floor",), size=(1, 1, 1))
+                 for i in range(5))
+    req = PlanRequest("floor", recs, Room(((0, 0), (4, 0), (4, 4), (0, 4)), 2.5),
+                      placed=(PlacedInstance(7, "a9", "x", "floor", np.eye(4)),))
+    plan = GroupPlan("floor", (
+        PlannedObject(3, (Relation("edge"),)),
+        PlannedObject(1, (Relation("near", 0), Relation("near", 4, (), True))),  # hard relation to a later object
+        PlannedObject(0, (Relation("near", 1), Relation("height", None, (0.0, 1.0)))),  # soft: to a dropped one; wrong group
+        PlannedObject(3), PlannedObject(9),
+    ), "x")
+    review = review_plan(plan, req)
+    assert validate_plan(plan, req) == list(review.problems) and len(review.problems) == 5
+    # the repair is well-formed by the strict rules; its only gap is the object it took out
+    assert validate_plan(review.plan, req) == ["objects never planned: [1]"]
+    assert [p.source for p in review.plan.order] == [3, 0, 2, 4]
+    assert review.dropped == ((1, "hard relation unusable: relation 'near' to unknown or later object 4 (not an "
+                                   "earlier object of the plan)"),)
+    assert review.plan.order[1].relations == ()  # both soft relations of object 0 removed, with notes
+    items, notes = resolve_plan(req, plan)
+    assert [it.record.id for it in items] == ["a3", "a0", "a2", "a4", "a1"]
+    assert [it.forced_reason for it in items][-1] == review.dropped[0][1] and notes == list(review.notes)
+    fixed, dropped, _ = sanitise_plan(plan, req)
+    assert fixed == review.plan and [(d.asset, d.reason) for d in dropped] == [("a1", review.dropped[0][1])]

@@ -26,12 +26,12 @@ import numpy as np
 
 from ..assets.catalog import Catalog
 from ..config import GenerateConfig
-from ..contracts import AssetRecord, DroppedObject, PlacedInstance, Relation, SceneLayout
+from ..contracts import AssetRecord, DroppedObject, PlacedInstance, SceneLayout
 from ..errors import AssistError
 from ..records import PLAN_COUNTERS
 from ..rng import make_rng
 from .planners import make_planner
-from .relations import CROSS_GROUP, RELATIONS, GroupPlan, PlannedObject, Planner, PlanRequest, group_kind, relation_problem
+from .relations import GroupPlan, Planner, PlanRequest, review_plan
 from .room import sample_room
 from .rules import RulePlanner
 from .selection import Selection, select_objects
@@ -49,59 +49,13 @@ def _placement_api() -> tuple[Callable, Callable]:
 
 
 def sanitise_plan(plan: GroupPlan, request: PlanRequest) -> tuple[GroupPlan, list[DroppedObject], list[str]]:
-    """A well-formed copy of ``plan``: duplicates and out-of-range objects removed, soft relations
-    that are unknown, not allowed for the group or aimed at an unknown/later object removed, objects
-    whose *hard* relation is broken dropped, objects the plan forgot appended without relations.
-
-    Returns the plan, the dropped objects (with reasons) and notes describing every repair.
-    """
-    kind = group_kind(request.group)
-    placed_ids = {p.id for p in request.placed} | ({request.support.id} if request.support else set())
-    notes: list[str] = []
-    dropped: list[DroppedObject] = []
-    seen: set[int] = set()
-    new_pos: dict[int, int] = {}  # old position -> new position of kept objects
-    kept: list[PlannedObject] = []
-    for pos, item in enumerate(plan.order):
-        if not 0 <= item.source < len(request.objects):
-            notes.append(f"{request.group}: position {pos}: object index {item.source} out of range; ignored")
-            continue
-        if item.source in seen:
-            notes.append(f"{request.group}: position {pos}: object {item.source} listed twice; kept the first")
-            continue
-        seen.add(item.source)
-        rec = request.objects[item.source]
-        rels: list[Relation] = []
-        broken_hard: str | None = None
-        for r in item.relations:
-            problem = relation_problem(r, kind, placed_ids, new_pos)
-            if problem is None:
-                rels.append(Relation(r.kind, new_pos[r.target] if _indexes_plan(r) else r.target, r.value, r.hard))
-            elif r.hard:
-                broken_hard = problem
-                break
-            else:
-                notes.append(f"{request.group}: {rec.class_name} ({rec.id}): dropped relation: {problem}")
-        if broken_hard is not None:
-            dropped.append(DroppedObject(rec.id, request.group, f"hard relation unusable: {broken_hard}"))
-            continue
-        new_pos[pos] = len(kept)
-        kept.append(PlannedObject(item.source, tuple(rels)))
-    dropped_ids = {d.asset for d in dropped}
-    for i, rec in enumerate(request.objects):
-        if i not in seen:
-            notes.append(f"{request.group}: {rec.class_name} ({rec.id}) missing from the plan; appended without "
-                         f"relations")
-            kept.append(PlannedObject(i))
-    fixed = GroupPlan(plan.group, tuple(kept), plan.planner, plan.notes + tuple(notes), dict(plan.stats))
-    if dropped_ids:
+    """The well-formed plan of :func:`~assist3d.scene.relations.review_plan`, the objects it took
+    out as dropped objects (with reasons) and the notes describing every repair."""
+    review = review_plan(plan, request)
+    dropped = [DroppedObject(request.objects[i].id, request.group, reason) for i, reason in review.dropped]
+    if dropped:
         log.debug("%s: %d object(s) dropped by the plan repair", request.group, len(dropped))
-    return fixed, dropped, notes
-
-
-def _indexes_plan(r: Relation) -> bool:
-    spec = RELATIONS.get(r.kind)
-    return spec is not None and spec.needs_target and r.kind not in CROSS_GROUP
+    return review.plan, dropped, list(review.notes)
 
 
 @dataclass

@@ -127,28 +127,91 @@ def relation_problem(r: Relation, kind: str, placed_ids: Container[int], earlier
     return None
 
 
-def validate_plan(plan: GroupPlan, request: PlanRequest) -> list[str]:
-    """Problems with a plan: unknown kinds, targets that are not earlier objects, duplicates,
-    missing objects. An empty list means the plan is well-formed."""
-    problems: list[str] = []
-    seen: set[int] = set()
+@dataclass(frozen=True)
+class PlanReview:
+    """One reading of a plan against its request (:func:`review_plan`).
+
+    ``plan``: the well-formed plan: out-of-range and repeated entries removed, soft relations that
+    cannot be used removed, objects whose *hard* relation cannot be used taken out, forgotten
+    objects appended without relations; in-group targets renumbered to the kept positions.
+    ``dropped``: ``(object index, reason)`` of the objects taken out. ``notes``: every repair, for
+    the layout's notes. ``problems``: the plan as written judged strictly (positions as the
+    planner wrote them), for a planner that asks its author to fix the plan; empty means the plan
+    is well-formed as it is.
+    """
+
+    plan: GroupPlan
+    dropped: tuple[tuple[int, str], ...]
+    notes: tuple[str, ...]
+    problems: tuple[str, ...]
+
+
+def review_plan(plan: GroupPlan, request: PlanRequest) -> PlanReview:
+    """Check and repair ``plan`` for ``request``: the one set of plan rules every caller uses
+    (the layout stage, the placement engine, the LLM planner's repair loop)."""
     kind = group_kind(request.group)
     placed_ids = {p.id for p in request.placed} | ({request.support.id} if request.support else set())
+    problems: list[str] = []
+    notes: list[str] = []
+    dropped: list[tuple[int, str]] = []
+    seen: set[int] = set()
+    new_pos: dict[int, int] = {}  # position in the plan as written -> position in the repaired plan
+    kept: list[PlannedObject] = []
     for pos, item in enumerate(plan.order):
         if not 0 <= item.source < len(request.objects):
             problems.append(f"position {pos}: object index {item.source} out of range")
+            notes.append(f"{request.group}: position {pos}: object index {item.source} out of range; ignored")
             continue
-        if item.source in seen:
+        repeated = item.source in seen
+        if repeated:
             problems.append(f"position {pos}: object {item.source} listed twice")
+            notes.append(f"{request.group}: position {pos}: object {item.source} listed twice; kept the first")
         seen.add(item.source)
+        rec = request.objects[item.source]
+        rels: list[Relation] = []
+        broken_hard: str | None = None
         for r in item.relations:
-            problem = relation_problem(r, kind, placed_ids, range(pos))
-            if problem is not None:
-                problems.append(f"position {pos}: {problem}")
-    missing = set(range(len(request.objects))) - seen
+            strict = relation_problem(r, kind, placed_ids, range(pos))
+            if strict is not None:
+                problems.append(f"position {pos}: {strict}")
+            if repeated or broken_hard is not None:
+                continue
+            problem = relation_problem(r, kind, placed_ids, new_pos)
+            if problem is None:
+                rels.append(Relation(r.kind, new_pos[r.target] if _indexes_plan(r) else r.target,  # type: ignore[index]
+                                     r.value, r.hard))
+            elif r.hard:
+                broken_hard = problem
+            else:
+                notes.append(f"{request.group}: {rec.class_name} ({rec.id}): dropped relation: {problem}")
+        if repeated:
+            continue
+        if broken_hard is not None:
+            dropped.append((item.source, f"hard relation unusable: {broken_hard}"))
+            continue
+        new_pos[pos] = len(kept)
+        kept.append(PlannedObject(item.source, tuple(rels)))
+    missing = [i for i in range(len(request.objects)) if i not in seen]
     if missing:
-        problems.append(f"objects never planned: {sorted(missing)}")
-    return problems
+        problems.append(f"objects never planned: {missing}")
+    for i in missing:
+        rec = request.objects[i]
+        notes.append(f"{request.group}: {rec.class_name} ({rec.id}) missing from the plan; appended without relations")
+        kept.append(PlannedObject(i))
+    fixed = GroupPlan(plan.group, tuple(kept), plan.planner, plan.notes + tuple(notes), dict(plan.stats))
+    return PlanReview(fixed, tuple(dropped), tuple(notes), tuple(problems))
+
+
+def _indexes_plan(r: Relation) -> bool:
+    """Whether ``r``'s target is a position in the group's plan (not an instance id)."""
+    spec = RELATIONS.get(r.kind)
+    return spec is not None and spec.needs_target and r.kind not in CROSS_GROUP
+
+
+def validate_plan(plan: GroupPlan, request: PlanRequest) -> list[str]:
+    """Problems with a plan as written: unknown kinds, targets that are not earlier objects,
+    duplicates, missing objects. An empty list means the plan is well-formed."""
+    return list(review_plan(plan, request).problems)
 
 
 def canonical_relation_names() -> Sequence[str]:

@@ -9,7 +9,7 @@ import numpy as np
 
 from ...contracts import AssetRecord, PlacedInstance, Relation
 from ..geometry import pose_xyz_yaw
-from ..relations import CROSS_GROUP, RELATIONS, GroupPlan, PlanRequest, group_kind, relation_problem
+from ..relations import CROSS_GROUP, RELATIONS, GroupPlan, PlanRequest, review_plan
 from .scoring import SATISFIED, Candidates, TargetBox, relation_score
 from .search import Choice
 
@@ -31,49 +31,16 @@ class Item:
 
 
 def resolve_plan(request: PlanRequest, plan: GroupPlan) -> tuple[list[Item], list[str]]:
-    """Turn a plan into items, repairing what is malformed instead of failing.
-
-    Entries with an out-of-range or repeated source are ignored; objects the plan forgot are
-    appended without relations. A relation with an unknown kind, a target that is not an earlier
-    object or not a placed instance, or the wrong number of values is dropped when soft; when
-    hard, the object cannot be placed and is dropped with that reason. Returns the items and
-    notes describing every repair.
-    """
-    notes: list[str] = []
-    kind = group_kind(request.group)
-    placed_ids = {p.id for p in request.placed} | ({request.support.id} if request.support else set())
-    pos_to_item: dict[int, int] = {}
-    items: list[Item] = []
-    seen: set[int] = set()
-    for pos, po in enumerate(plan.order):
-        if not 0 <= po.source < len(request.objects) or po.source in seen:
-            notes.append(f"plan position {pos}: object index {po.source} invalid or repeated; ignored")
-            continue
-        seen.add(po.source)
-        rec = request.objects[po.source]
-        rels: list[Relation] = []
-        forced: str | None = None
-        for r in po.relations:
-            problem = relation_problem(r, kind, placed_ids, pos_to_item)
-            if problem is None:
-                target = r.target
-                if RELATIONS[r.kind].needs_target and r.kind not in CROSS_GROUP:
-                    target = pos_to_item[int(r.target)]  # type: ignore[arg-type]
-                rels.append(Relation(r.kind, target, tuple(r.value), r.hard))
-            elif r.hard:
-                forced = f"hard relation {r.kind}({r.target}) cannot be used: {problem}"
-                notes.append(f"{rec.id}: {forced}")
-            else:
-                notes.append(f"{rec.id}: soft relation {r.kind}({r.target}) ignored: {problem}")
-        pos_to_item[pos] = len(items)
-        items.append(Item(rec, tuple(rels), forced))
-    for i, rec in enumerate(request.objects):
-        if i not in seen:
-            notes.append(f"{rec.id}: missing from the plan; appended without relations")
-            items.append(Item(rec, ()))
-    for note in notes:
-        log.debug("%s: %s", request.group, note)
-    return items, notes
+    """Turn a plan into items, repairing what is malformed instead of failing (the rules of
+    :func:`~assist3d.scene.relations.review_plan`): an object whose hard relation cannot be used
+    becomes an item that is never placed, with that reason. Returns the items and the notes
+    describing every repair (none for a plan the layout stage already repaired)."""
+    review = review_plan(plan, request)
+    items = [Item(request.objects[po.source], po.relations) for po in review.plan.order]
+    items += [Item(request.objects[i], (), reason) for i, reason in review.dropped]
+    for note in review.notes:
+        log.debug("%s", note)
+    return items, list(review.notes)
 
 
 class MovingBoxesMixin:
