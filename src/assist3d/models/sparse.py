@@ -28,6 +28,8 @@ from typing import Any
 import torch
 from torch import nn
 
+from . import spconv_backend
+
 _BACKEND = {"name": "torch"}
 _BITS = 16  # bits per spatial axis in a key (65,536 voxels = 1.3 km at 2 cm)
 _MASK = (1 << _BITS) - 1
@@ -39,8 +41,6 @@ def set_backend(name: str) -> None:
     if name not in ("torch", "spconv"):
         raise ValueError(f"unknown sparse backend {name!r}; expected 'torch' or 'spconv'")
     if name == "spconv":
-        from . import spconv_backend
-
         spconv_backend._spconv()
     _BACKEND["name"] = name
 
@@ -180,8 +180,6 @@ class SubMConv3d(nn.Module):
         feats = x.feats
         w = self.weight.to(feats.dtype)
         if _BACKEND["name"] == "spconv":
-            from . import spconv_backend
-
             out = spconv_backend.subm_conv(x.coords, feats, w, self.kernel_size)
             if self.bias is not None:
                 out = out + self.bias.to(out.dtype)
@@ -286,9 +284,11 @@ class UpConv3d(nn.Module):
             raise ValueError("UpConv3d: the input is not the stride-2 parent of the target coordinates")
         w = self.weight.to(x.feats.dtype)
         if _BACKEND["name"] == "spconv":
-            from . import spconv_backend
-
-            out = spconv_backend.up_conv(x.coords, x.feats, w, target.coords)
+            sites, feats = spconv_backend.up_conv(x.coords, x.feats, w)
+            rows = CoordSet.build(sites).lookup(target.coords)
+            if bool((rows < 0).any()):
+                raise RuntimeError("spconv's transposed conv missed target sites")
+            out = feats[rows]
             if self.bias is not None:
                 out = out + self.bias.to(out.dtype)
             return SparseTensor(feats=out, cset=target.cset, stride=target.stride)

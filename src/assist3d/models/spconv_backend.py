@@ -1,11 +1,12 @@
-"""Optional ``spconv`` 2.x backend for the three sparse operators of :mod:`assist3d.models.sparse`.
+"""Optional ``spconv`` 2.x backend for the submanifold and transposed convolutions of
+:mod:`assist3d.models.sparse` (the strided down-convolution always runs in pure PyTorch).
 
 The weights stay the pure-PyTorch modules' parameters (``(k**3, C_in, C_out)``), so one checkpoint
 runs on either backend; each call reshapes them to spconv's ``(C_out, kx, ky, kz, C_in)`` layout and
 runs spconv's implicit-GEMM kernels through the module's ``_conv_forward``. Outputs are reordered to
 the pure-PyTorch coordinate order, so the two backends are interchangeable layer by layer. The
 transposed convolution has no cheap "onto these coordinates" form in spconv without sharing its
-index dictionary, so it generates all eight children and keeps the target ones.
+index dictionary, so it generates all eight children and the caller keeps the target ones.
 
 Enable with ``set_backend("spconv")`` (``model.backend: spconv`` in a training config).
 
@@ -96,28 +97,11 @@ def subm_conv(coords: torch.Tensor, feats: torch.Tensor, weight: torch.Tensor, k
     return y.features
 
 
-def down_conv(coords: torch.Tensor, feats: torch.Tensor, weight: torch.Tensor, coarse) -> torch.Tensor:
-    """Kernel-2 stride-2 conv; output rows in the order of ``coarse`` (a CoordSet)."""
-    m = _module("down", weight.shape[1], weight.shape[2], 2)
-    x = _to_spconv(coords, feats)
-    with _safe_threads(feats):
-        y = m._conv_forward(m.training, x, _weight(weight, 2), None)
-    rows = coarse.lookup(y.indices)
-    if bool((rows < 0).any()):
-        raise RuntimeError("spconv produced coarse sites that the coordinate map does not know")
-    out = y.features.new_zeros((len(coarse), y.features.shape[1]))
-    return out.index_copy(0, rows, y.features)
-
-
-def up_conv(coords: torch.Tensor, feats: torch.Tensor, weight: torch.Tensor, target_coords: torch.Tensor) -> torch.Tensor:
-    """Transposed kernel-2 stride-2 conv read at ``target_coords`` (N, 4)."""
-    from .sparse import CoordSet
-
+def up_conv(coords: torch.Tensor, feats: torch.Tensor, weight: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """Transposed kernel-2 stride-2 conv: its output sites ``(M, 4)`` and features ``(M, C)``
+    (the caller reads them at the sites it needs)."""
     m = _module("up", weight.shape[1], weight.shape[2], 2)
     x = _to_spconv(coords, feats)
     with _safe_threads(feats):
         y = m._conv_forward(m.training, x, _weight(weight, 2), None)
-    rows = CoordSet.build(y.indices).lookup(target_coords)
-    if bool((rows < 0).any()):
-        raise RuntimeError("spconv's transposed conv missed target sites")
-    return y.features[rows]
+    return y.indices, y.features
