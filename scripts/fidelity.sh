@@ -10,7 +10,8 @@
 # Environment: STEPS (training steps per run, default 600), SEEDS (default 3), SCENES (scenes per
 # generator, default 60), GENERATORS (default "assist3d randomrooms holodeck-style no-context
 # mesh-sampled"), ASSETS (catalog folder; the docs use Sweet Home 3D + the procedural library),
-# DEV (real scans, default ../shared/data/real/dev), THREADS (torch threads, default 2),
+# DEV (real scans, default ../shared/data/real/dev), THREADS (torch threads, default 2), LOADER_WORKERS
+# (example-building processes, default 1; the batches are the same for any number),
 # SKIP_REAL=1 to leave out the leave-one-room-out rows; TSDF=1 adds "assist3d-tsdf": the ASSIST-3D
 # preset with render.point_source=tsdf (ScanNet-like reconstructed surfaces; needs the [sim] extra),
 # the same scenes as "assist3d" (same seed and layouts), only the points differ.
@@ -24,6 +25,7 @@ GENERATORS=${GENERATORS:-"assist3d randomrooms holodeck-style no-context mesh-sa
 HERE="$(cd "$(dirname "$0")/.." && pwd)"
 DEV=${DEV:-$HERE/../shared/data/real/dev}
 THREADS=${THREADS:-2}
+LOADER_WORKERS=${LOADER_WORKERS:-1}
 if [[ -z "${ASSIST3D:-}" ]]; then
   if command -v assist3d >/dev/null 2>&1; then ASSIST3D=assist3d; else ASSIST3D="$HERE/.venv/bin/assist3d"; fi
 fi
@@ -46,7 +48,7 @@ fi
 
 for g in $PROBED; do
   "$ASSIST3D" probe --train "assist3d:$OUT/data/$g" --eval "array:$DEV" --steps "$STEPS" --seeds "$SEEDS" \
-    --threads "$THREADS" --out "$OUT/probe/$g" --json > "$OUT/probe/$g.json"
+    --threads "$THREADS" --loader-workers "$LOADER_WORKERS" --out "$OUT/probe/$g" --json > "$OUT/probe/$g.json"
   echo "probe $g done" >&2
 done
 
@@ -63,7 +65,7 @@ if [[ "${SKIP_REAL:-0}" != 1 ]]; then
       if [[ "$(basename "$f" | cut -c1-9)" == "$r" ]]; then eval_args+=(--eval "array:$f"); else train_args+=(--train "array:$f"); fi
     done
     "$ASSIST3D" probe "${train_args[@]}" "${eval_args[@]}" --steps "$STEPS" --seeds "$SEEDS" --threads "$THREADS" \
-      --out "$OUT/probe/real-loro/$r" --json > "$OUT/probe/real-loro/$r.json"
+      --loader-workers "$LOADER_WORKERS" --out "$OUT/probe/real-loro/$r" --json > "$OUT/probe/real-loro/$r.json"
   done
 fi
 

@@ -157,7 +157,7 @@ def summarise_runs(runs: list[dict]) -> dict:
     return out
 
 
-def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu",
+def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", loader_workers: int = 0,
               on_event: Callable[[str, dict], None] | None = None) -> dict:
     """Train and evaluate ``req.seeds`` seeds into ``out_dir``; returns (and writes) the summary."""
     out = Path(out_dir)
@@ -184,6 +184,7 @@ def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu",
             emit("train_start", {"seed": seed})
             rec = train_segmenter(req.config, scenes, sdir, seed=seed, budget=req.budget,
                                   meta={"train": list(req.train)}, device=device,
+                                  loader_workers=loader_workers,
                                   on_step=lambda row: emit("step", {"seed": seed, **row}))
             loaded = load_segmenter(rec.checkpoint)
             save_segmenter(model_path, loaded.model, req.config, meta=loaded.meta)

@@ -24,8 +24,9 @@ import torch.nn.functional as F
 from ..errors import ConfigError
 from .checkpoint import load_segmenter, save_segmenter
 from .config import SegmenterConfig
-from .data import Example, Scene, make_example
+from .data import Example, Scene
 from .infer import batch_coords
+from .loader import BatchLoader
 from .model import Segmenter
 
 log = logging.getLogger(__name__)
@@ -115,9 +116,13 @@ def _lr(cfg: SegmenterConfig, progress: float) -> float:
 
 
 def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str | Path, *, seed: int,
-                    budget: Budget, meta: dict | None = None, device: str = "cpu",
+                    budget: Budget, meta: dict | None = None, device: str = "cpu", loader_workers: int = 0,
                     on_step: Callable[[dict], None] | None = None) -> TrainRecord:
-    """Train on ``scenes`` into ``out_dir/last.pt`` (resumed when it exists); returns the record."""
+    """Train on ``scenes`` into ``out_dir/last.pt`` (resumed when it exists); returns the record.
+
+    ``loader_workers`` processes build the coming steps' examples while the network trains
+    (:mod:`.loader`); the batches, and so the result, are the same for any number of workers.
+    """
     if not scenes:
         raise ConfigError("no training scenes")
     out = Path(out_dir)
@@ -151,30 +156,29 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
 
     last_save = time.perf_counter()
     model.train()
-    while budget.progress(step, seconds) < 1.0:
-        t0 = time.perf_counter()
-        rng = np.random.default_rng([seed, step])
-        picks = rng.integers(len(scenes), size=cfg.optim.batch_size)
-        examples = [make_example(scenes[int(i)], cfg, rng) for i in picks]
-        for g in opt.param_groups:
-            g["lr"] = _lr(cfg, budget.progress(step, seconds))
-        opt.zero_grad(set_to_none=True)
-        loss, parts = example_loss(model, examples, cfg, device)
-        if not math.isfinite(parts["loss"]):
-            raise FloatingPointError(f"training diverged at step {step} (loss {parts['loss']}); lower optim.lr")
-        loss.backward()
-        torch.nn.utils.clip_grad_norm_(model.parameters(), 5.0)
-        opt.step()
-        step += 1
-        seconds += time.perf_counter() - t0
-        last_loss = parts["loss"]
-        pending.append({"step": step, "train_seconds": round(seconds, 3), "lr": opt.param_groups[0]["lr"],
-                        **{k: round(v, 6) for k, v in parts.items()}})
-        if on_step is not None:
-            on_step({"step": step, "train_seconds": seconds, "progress": budget.progress(step, seconds),
-                     "lr": opt.param_groups[0]["lr"], **parts})
-        if time.perf_counter() - last_save > CHECKPOINT_EVERY_S:
-            save()
-            last_save = time.perf_counter()
+    with BatchLoader(scenes, cfg, seed, step, workers=loader_workers) as loader:
+        while budget.progress(step, seconds) < 1.0:
+            t0 = time.perf_counter()
+            _, examples = loader.next()
+            for g in opt.param_groups:
+                g["lr"] = _lr(cfg, budget.progress(step, seconds))
+            opt.zero_grad(set_to_none=True)
+            loss, parts = example_loss(model, examples, cfg, device)
+            if not math.isfinite(parts["loss"]):
+                raise FloatingPointError(f"training diverged at step {step} (loss {parts['loss']}); lower optim.lr")
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(model.parameters(), 5.0)
+            opt.step()
+            step += 1
+            seconds += time.perf_counter() - t0
+            last_loss = parts["loss"]
+            pending.append({"step": step, "train_seconds": round(seconds, 3), "lr": opt.param_groups[0]["lr"],
+                            **{k: round(v, 6) for k, v in parts.items()}})
+            if on_step is not None:
+                on_step({"step": step, "train_seconds": seconds, "progress": budget.progress(step, seconds),
+                         "lr": opt.param_groups[0]["lr"], **parts})
+            if time.perf_counter() - last_save > CHECKPOINT_EVERY_S:
+                save()
+                last_save = time.perf_counter()
     save()
     return TrainRecord(steps=step, train_seconds=seconds, last_loss=last_loss, checkpoint=last)
