@@ -46,10 +46,14 @@ if [[ "${TSDF:-0}" == 1 ]]; then
   PROBED="$PROBED assist3d-tsdf"
 fi
 
-for g in $PROBED; do
-  "$ASSIST3D" probe --train "assist3d:$OUT/data/$g" --eval "array:$DEV" --steps "$STEPS" --seeds "$SEEDS" \
-    --threads "$THREADS" --loader-workers "$LOADER_WORKERS" --out "$OUT/probe/$g" --json > "$OUT/probe/$g.json"
-  echo "probe $g done" >&2
+# seed by seed across generators (a probe folder resumes and only adds the missing seeds), so a run
+# cut short leaves every generator with the same number of seeds
+for k in $(seq 1 "$SEEDS"); do
+  for g in $PROBED; do
+    "$ASSIST3D" probe --train "assist3d:$OUT/data/$g" --eval "array:$DEV" --steps "$STEPS" --seeds "$k" \
+      --threads "$THREADS" --loader-workers "$LOADER_WORKERS" --out "$OUT/probe/$g" --json > "$OUT/probe/$g.json"
+    echo "probe $g: $k seed(s) done" >&2
+  done
 done
 
 # the non-learned reference
