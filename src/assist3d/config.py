@@ -239,6 +239,13 @@ class LLMConfig(_Section):
     max_tokens: int = Field(4096, ge=16, le=1_000_000, description="max_tokens sent with each request (at most "
                                                                    "1,000,000).")
     concurrency: int = Field(4, ge=1, le=256, description="Concurrent requests across all workers (at most 256).")
+    plan_concurrently: bool = Field(True, description="Plan a scene's on-top groups at the same time (up to "
+                                                      "`concurrency` requests) once its floor and wall objects are "
+                                                      "placed; false = one group after another. The same answers "
+                                                      "give the same layout either way.")
+    scene_budget_s: float | None = Field(None, gt=0, le=86400, description="LLM planning time per scene, s: groups "
+                                         "whose planning starts later are planned by the rules (recorded in "
+                                         "layout.json); None = no limit.")
     cache_dir: str | None = Field(None, description="Response cache folder; None = <cache>/llm.")
     json_mode: bool = Field(True, description="Ask for response_format json_object (dropped silently when the "
                                               "server rejects it).")

@@ -116,3 +116,55 @@ def test_build_layout_survives_a_stalling_and_an_oversized_server(tmp_path, monk
     assert all(v == "rules" for g, v in lay.planner.items() if g.startswith("on:"))
     assert lay.instances and elapsed < 1.0 + 3.0  # one stalled request, not one per retry
     assert not files_containing(SENTINEL, tmp_path, os.environ["ASSIST3D_CACHE"])
+
+
+def _slow(delay: float):
+    def answer(body: dict) -> Step:
+        step = _answer(body)
+        return Step(step.content, status=step.status, sleep=delay if step.status == 200 else 0.0)
+    return answer
+
+
+def _llm_cfg(url: str, tmp_path, **llm) -> GenerateConfig:
+    return GenerateConfig.model_validate({
+        "selection": {"floor_count": 6, "wall_count": 2, "on_top_count": 2},
+        "layout": {"group_budget_s": 5.0},
+        "llm": {"base_url": url, "model": MODEL, "timeout_s": 5.0, "retries": 0, "concurrency": 4,
+                "cache_dir": str(tmp_path / "llm"), **llm}})
+
+
+def test_on_top_groups_are_planned_concurrently_and_give_the_serial_layout(tmp_path, monkeypatch):
+    monkeypatch.setenv("OPENAI_API_KEY", SENTINEL)
+    cat = _catalog(tmp_path / "cat")
+    layouts, peaks = {}, {}
+    for mode, concurrently in (("serial", False), ("concurrent", True)):
+        with FakeServer([], responder=_slow(0.3)) as srv:
+            cfg = _llm_cfg(srv.url, tmp_path / mode, plan_concurrently=concurrently)
+            layouts[mode] = layout_mod.build_layout(cat, cfg, 5)
+            peaks[mode] = srv.max_active
+    on_top = [g for g in layouts["serial"].planner if g.startswith("on:")]
+    assert len(on_top) >= 2 and all(layouts["serial"].planner[g] == f"llm:{MODEL}" for g in on_top)
+    assert peaks["serial"] == 1 and peaks["concurrent"] >= 2
+    a, b = layouts["serial"], layouts["concurrent"]
+    assert a.planner == b.planner and a.stats["llm_calls"] == b.stats["llm_calls"]
+    assert [i.to_json() for i in a.instances] == [i.to_json() for i in b.instances]
+    assert [d.to_json() for d in a.dropped] == [d.to_json() for d in b.dropped]
+    def port_free(notes):
+        return [re.sub(r"127\.0\.0\.1:\d+", "HOST", n) for n in notes]
+    assert port_free(a.stats["notes"]) == port_free(b.stats["notes"])  # the servers' ports differ
+
+
+def test_scene_budget_hands_the_remaining_groups_to_the_rules(tmp_path, monkeypatch):
+    monkeypatch.setenv("OPENAI_API_KEY", SENTINEL)
+    cat = _catalog(tmp_path / "cat")
+    with FakeServer([], responder=_slow(0.4)) as srv:
+        cfg = _llm_cfg(srv.url, tmp_path, scene_budget_s=0.2)
+        lay = layout_mod.build_layout(cat, cfg, 5)
+    # the floor group starts inside the budget and takes 0.4 s; every group after it is over
+    assert lay.planner["floor"] == f"llm:{MODEL}"
+    assert lay.planner["wall"] == "rules"
+    on_top = [g for g in lay.planner if g.startswith("on:")]
+    assert on_top and all(lay.planner[g] == "rules" for g in on_top)
+    assert lay.stats["llm_budget_groups"] == 1 + len(on_top)
+    assert sum("LLM planning budget (0.2 s) was spent" in n for n in lay.stats["notes"]) == 1 + len(on_top)
+    assert len(srv.requests) == 1

@@ -6,7 +6,12 @@
 1. sample the room shell;
 2. select floor, wall and on-top assets;
 3. plan and place the floor group, then the wall group (knowing the floor instances), then, for
-   every placed instance with a support surface, its on-top group ``on:<id>``.
+   every placed instance with a support surface, its on-top group ``on:<id>``. An on-top group's
+   plan depends only on its objects, the room and its support, so with an LLM planner every on-top
+   group of the scene is planned at once (``llm.concurrency`` requests, ``llm.plan_concurrently``)
+   before they are placed one after another in the usual order: the same answers give the same
+   layout whatever order they arrive in. ``llm.scene_budget_s`` bounds a scene's planning time:
+   a group whose planning starts after it is planned by the rules, with a note.
 
 Nothing here raises for an impossible scene: plans with unknown relations, targets or duplicate
 objects are repaired (constraints dropped, with a note; an object whose *hard* relation is broken
@@ -19,6 +24,7 @@ from __future__ import annotations
 import logging
 import time
 from collections import defaultdict, deque
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -58,6 +64,24 @@ def sanitise_plan(plan: GroupPlan, request: PlanRequest) -> tuple[GroupPlan, lis
     return review.plan, dropped, list(review.notes)
 
 
+@dataclass(frozen=True)
+class _Planned:
+    """A group's plan made ahead of its placement, with the notes to record when it is placed."""
+
+    plan: GroupPlan
+    notes: tuple[str, ...]
+    over_budget: bool
+
+
+@dataclass(frozen=True)
+class _OnTopJob:
+    """One on-top group to plan and place (``support`` None: its parent was not placed)."""
+
+    group: str
+    objects: tuple[AssetRecord, ...]
+    support: PlacedInstance | None
+
+
 @dataclass
 class _Run:
     """Mutable bookkeeping of one build_layout call."""
@@ -74,19 +98,42 @@ class _Run:
     plan_stats: dict = field(default_factory=lambda: defaultdict(float))
     place_stats: dict = field(default_factory=lambda: defaultdict(float))
     timing: dict = field(default_factory=dict)
+    deadline: float | None = None  # monotonic time after which groups are planned by the rules
+    budget_s: float | None = None
+    over_budget: int = 0
 
     @property
     def next_id(self) -> int:
         return 1 + max((i.id for i in self.instances), default=0)
 
-    def plan(self, request: PlanRequest, rng: np.random.Generator) -> GroupPlan:
+    def plan_ahead(self, request: PlanRequest) -> _Planned:
+        """Plan one group without touching the run's records (safe to call from several threads)."""
+        rng = make_rng(self.seed, "plan", request.group)
+        if self.deadline is not None and time.monotonic() >= self.deadline:
+            note = (f"{request.group}: the scene's LLM planning budget ({self.budget_s:g} s) was spent; "
+                    f"rule-based plan used")
+            return _Planned(RulePlanner().plan(request, rng=rng), (note,), True)
         try:
-            plan = self.planner.plan(request, rng=rng)
+            return _Planned(self.planner.plan(request, rng=rng), (), False)
         except AssistError as e:
-            self.notes.append(f"{request.group}: planner {self.planner.name} failed ({e}); rule-based plan used")
-            plan = RulePlanner().plan(request, rng=rng)
-        self.add_plan_stats(plan.stats)
-        return plan
+            note = f"{request.group}: planner {self.planner.name} failed ({e}); rule-based plan used"
+            return _Planned(RulePlanner().plan(request, rng=rng), (note,), False)
+
+    def plan_many(self, requests: list[PlanRequest], workers: int) -> dict[str, _Planned]:
+        """Plans of ``requests`` made ``workers`` at a time; recorded only when each group is placed."""
+        if workers <= 1 or len(requests) <= 1:
+            return {}
+        t0 = time.perf_counter()
+        with ThreadPoolExecutor(max_workers=min(workers, len(requests)), thread_name_prefix="plan") as pool:
+            planned = dict(zip((r.group for r in requests), pool.map(self.plan_ahead, requests)))
+        self.timing["plan_on_top"] = round(time.perf_counter() - t0, 4)
+        return planned
+
+    def record_plan(self, planned: _Planned) -> GroupPlan:
+        self.notes.extend(planned.notes)
+        self.over_budget += int(planned.over_budget)
+        self.add_plan_stats(planned.plan.stats)
+        return planned.plan
 
     def add_plan_stats(self, stats: dict) -> None:
         """Sum a planner call's counters (LLM calls, cache hits, tokens, seconds) into the layout's."""
@@ -96,8 +143,9 @@ class _Run:
                 self.plan_stats[k] += v
 
     def run_group(self, group: str, objects: tuple[AssetRecord, ...], support: PlacedInstance | None,
-                  random_mode: bool) -> list[int | None]:
-        """Plan and place one group. Returns, for each object, the id of its placed instance or None."""
+                  random_mode: bool, planned: _Planned | None = None) -> list[int | None]:
+        """Plan (unless ``planned`` holds its plan) and place one group. Returns, for each object,
+        the id of its placed instance or None."""
         place_group, place_group_random = _placement_api()
         t0 = time.perf_counter()
         placed_before = tuple(self.instances)
@@ -116,7 +164,7 @@ class _Run:
                 result = place_group_random(request, self.catalog, cfg=self.cfg.layout, rng=place_rng,
                                             next_id=self.next_id)
             else:
-                plan = self.plan(plan_request, make_rng(self.seed, "plan", group))
+                plan = self.record_plan(planned if planned is not None else self.plan_ahead(plan_request))
                 self.notes.extend(plan.notes)
                 plan, extra_dropped, notes = sanitise_plan(plan, plan_request)
                 self.notes.extend(notes)
@@ -149,16 +197,26 @@ class _Run:
                 ids[q.popleft()] = inst.id
         return ids
 
-    def on_top(self, parents: tuple[AssetRecord, ...], ids: list[int | None],
-               lists: tuple[tuple[AssetRecord, ...], ...], random_mode: bool) -> None:
-        for rec, inst_id, items in zip(parents, ids, lists):
+    def on_top_jobs(self, ids: list[int | None], lists: tuple[tuple[AssetRecord, ...], ...]) -> list[_OnTopJob]:
+        jobs = []
+        for inst_id, items in zip(ids, lists):
             if not items:
                 continue
-            if inst_id is None:
-                self.dropped.extend(DroppedObject(r.id, "obj", "parent not placed") for r in items)
-                continue
-            support = next(i for i in self.instances if i.id == inst_id)
-            self.run_group(f"on:{inst_id}", items, support, random_mode)
+            support = None if inst_id is None else next(i for i in self.instances if i.id == inst_id)
+            jobs.append(_OnTopJob(f"on:{inst_id}", items, support))
+        return jobs
+
+    def on_top(self, jobs: list[_OnTopJob], random_mode: bool, workers: int) -> None:
+        """Plan the on-top groups (``workers`` at a time) and place them in ``jobs`` order."""
+        planned: dict[str, _Planned] = {}
+        if not random_mode:
+            planned = self.plan_many([PlanRequest(j.group, j.objects, self.room, (j.support,), j.support)  # type: ignore[arg-type]
+                                      for j in jobs if j.support is not None], workers)
+        for j in jobs:
+            if j.support is None:
+                self.dropped.extend(DroppedObject(r.id, "obj", "parent not placed") for r in j.objects)
+            else:
+                self.run_group(j.group, j.objects, j.support, random_mode, planned.get(j.group))
 
 
 def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_index: int = 0,
@@ -176,6 +234,11 @@ def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_inde
     sel: Selection = select_objects(catalog, cfg.selection, make_rng(seed, "select"), scene_index=scene_index,
                                     propose=propose)
     run = _Run(catalog, cfg, seed, planner, room)
+    uses_llm = not isinstance(planner, RulePlanner)
+    if uses_llm and cfg.llm.scene_budget_s is not None:
+        run.budget_s = cfg.llm.scene_budget_s
+        run.deadline = time.monotonic() + cfg.llm.scene_budget_s
+    workers = cfg.llm.concurrency if uses_llm and cfg.llm.plan_concurrently else 1
     run.timing["select"] = round(time.perf_counter() - t0, 4)  # planner, room and selection
     room_llm = sel.stats.get("room_llm")
     if room_llm:  # the LLM's object plan counts with the planning calls
@@ -184,8 +247,8 @@ def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_inde
     random_mode = cfg.layout.planner == "none"
     floor_ids = run.run_group("floor", sel.floor, None, random_mode) if sel.floor else []
     wall_ids = run.run_group("wall", sel.wall, None, random_mode) if sel.wall else []
-    run.on_top(sel.floor, floor_ids, sel.floor_on_top, random_mode)
-    run.on_top(sel.wall, wall_ids, sel.wall_on_top, random_mode)
+    run.on_top(run.on_top_jobs(floor_ids, sel.floor_on_top) + run.on_top_jobs(wall_ids, sel.wall_on_top),
+               random_mode, workers)
 
     placed = {g: 0 for g in ("floor", "wall", "obj")}
     for inst in run.instances:
@@ -203,6 +266,8 @@ def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_inde
         "notes": run.notes[:MAX_NOTES],
         "timing": run.timing,
     }
+    if run.budget_s is not None:
+        stats["llm_budget_groups"] = run.over_budget  # groups the rules planned because the budget was spent
     for k in ("prompt_tokens", "completion_tokens"):
         if k in run.plan_stats:
             stats[k] = int(run.plan_stats[k])
