@@ -2,7 +2,7 @@
 
 Starts a chat-completions server on 127.0.0.1 that answers every planning prompt with a
 well-formed plan after ``--latency`` seconds (and, with ``--stall-every K``, stalls ``--stall-s``
-seconds on the prompts whose hash is 0 modulo K: the hostile endpoint of issue 14), then builds
+seconds on every K-th request it receives: the hostile endpoint of issue 14), then builds
 the same layout (preset assist3d, paper selection counts) with the groups planned one after
 another and with the on-top groups planned concurrently, each with a fresh answer cache, and
 checks that the two layouts are identical.
@@ -16,7 +16,6 @@ No network access: the server is local and the key is a dummy. Figures go in doc
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import re
 import sys
@@ -64,10 +63,9 @@ class LatencyServer:
             def do_POST(self) -> None:
                 body = json.loads(self.rfile.read(int(self.headers.get("Content-Length", 0))))
                 prompt = body["messages"][-1]["content"]
-                digest = int(hashlib.sha256(prompt.encode()).hexdigest(), 16)
-                stall = stall_every > 0 and digest % stall_every == 0
                 with owner._lock:
                     owner.requests += 1
+                    stall = stall_every > 0 and owner.requests % stall_every == 0
                     owner.stalls += int(stall)
                     owner._active += 1
                     owner.max_active = max(owner.max_active, owner._active)

@@ -96,6 +96,9 @@ def test_metrics_cli_json_keys_are_the_datasets_as_given(tmp_path, monkeypatch):
         assert {"geometry_diversity", "context_complexity", "layout_score", "scenes", "instances"} <= set(row)
         assert row["scenes"] == 1 and row["instances"] == 2
     assert table["ds"]["geometry_diversity"] == table["assist3d:ds"]["geometry_diversity"]
+    for row in table.values():  # layout_realism: a number, or null with the reason
+        assert "layout_realism" in row
+        assert row["layout_realism"] is not None or row["notes"]["layout_realism"]
 
 
 def test_plot_labels_are_short_when_unambiguous():

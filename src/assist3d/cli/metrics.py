@@ -35,6 +35,10 @@ def metrics(
     llm_base_url: Optional[str] = typer.Option(None, "--llm-base-url", help="Also ask a vision-language model for a "
                                                                            "layout score (OpenAI-compatible)."),
     llm_model: Optional[str] = typer.Option(None, "--llm-model", help="Vision model name for --llm-base-url."),
+    realism_reference: Optional[str] = typer.Option(
+        None, "--realism-reference", help="Reference of layout_realism: a JSON file from scripts/realism_reference.py "
+                                          "or a labelled dataset FORMAT:PATH (default: the shipped statistics of real "
+                                          "ScanNet scans)."),
 ) -> None:
     """Geometry diversity, context complexity and layout reasonability of one or more datasets."""
     from rich.console import Console
@@ -42,6 +46,7 @@ def metrics(
 
     from ..config import LLMConfig
     from ..metrics.diversity import Codebook
+    from ..metrics.realism import load_reference
     from ..metrics.report import metrics_table, plot_summaries, shared_codebook, summarize_dataset
 
     vlm_cfg = None
@@ -52,19 +57,20 @@ def metrics(
     cb = Codebook.load(codebook) if codebook else shared_codebook(summaries, seed=seed)
     if save_codebook:
         cb.save(save_codebook)
-    table = metrics_table(summaries, cb)
+    table = metrics_table(summaries, cb, load_reference(realism_reference, max_scenes=max_scenes))
     if plot:
         plot_summaries(summaries, cb, plot)
     if as_json:
         typer.echo(json.dumps(table))
         return
-    t = Table(title="Dataset comparison (geometry diversity up, context complexity down, layout score up)")
-    for col in ("dataset", "scenes", "instances", "geometry diversity", "context complexity", "layout score"):
+    t = Table(title="Dataset comparison (geometry diversity up, context complexity down, layout score and realism up)")
+    for col in ("dataset", "scenes", "instances", "geometry diversity", "context complexity", "layout score",
+                "layout realism"):
         t.add_column(col, justify="right" if col != "dataset" else "left")
     fmt = lambda v, p: "n/a" if v is None else f"{v:.{p}f}"  # noqa: E731
     for name, row in table.items():
         t.add_row(shown(name, markup=True), str(row["scenes"]), str(row["instances"]), fmt(row["geometry_diversity"], 3),
-                  fmt(row["context_complexity"], 3), fmt(row["layout_score"], 1))
+                  fmt(row["context_complexity"], 3), fmt(row["layout_score"], 1), fmt(row["layout_realism"], 1))
     Console().print(t)
     for name, row in table.items():
         for k, why in (row.get("notes") or {}).items():

@@ -19,6 +19,7 @@ from .context import context_complexity, per_class_max_cooccurrence
 from .diversity import Codebook, fit_codebook, geometry_diversity
 from .features import FEATURE_DIM, instance_descriptors
 from .plausibility import score_layout
+from .realism import RealismReference, RealismStats, realism_score, scene_stats
 
 log = logging.getLogger(__name__)
 
@@ -39,6 +40,7 @@ class DatasetSummary:
     layout_components: list = field(default_factory=list)
     layout_reason: str | None = None
     vlm_scores: list = field(default_factory=list)
+    realism: RealismStats = field(default_factory=RealismStats)
 
 
 def normalise_spec(spec: str) -> str:
@@ -101,6 +103,7 @@ def summarize_dataset(spec: str, *, assets: str | None = None, max_scenes: int |
         sample = ds.load(sid)
         inst_ids, f = instance_descriptors(sample.coord, sample.instance, rng=rng)
         feats.append(f)
+        summary.realism.add(scene_stats(sample.coord, sample.instance))
         layout = _load_layout(Path(ds.root) / sid) if fmt == "assist3d" else None
         if layout is not None:
             summary.scene_classes.append({i.class_name for i in layout.instances})
@@ -165,13 +168,19 @@ def shared_codebook(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: in
     return fit_codebook(np.concatenate(pools), k=k, rng=rng)
 
 
-def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook) -> dict:
-    """``{name: {"geometry_diversity", "context_complexity", "layout_score", "scenes", "instances", ...}}``
-    keyed by each dataset as the user named it (``"dataset"`` holds its ``FORMAT:PATH`` form); a
-    metric that cannot be computed is None, with the reason under ``"notes"``."""
+def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
+                  reference: RealismReference | None = None) -> dict:
+    """``{name: {"geometry_diversity", "context_complexity", "layout_score", "layout_realism", "scenes",
+    "instances", ...}}`` keyed by each dataset as the user named it (``"dataset"`` holds its
+    ``FORMAT:PATH`` form); a metric that cannot be computed is None, with the reason under
+    ``"notes"``. ``reference`` defaults to the shipped real-scan statistics."""
+    reference = reference if reference is not None else RealismReference.load()
     out = {}
     for s in summaries:
         notes = {}
+        realism, realism_parts, why = realism_score(s.realism, reference)
+        if realism is None:
+            notes["layout_realism"] = why
         gd = geometry_diversity(s.features, codebook) if len(s.features) else None
         if gd is None:
             notes["geometry_diversity"] = "no instance with enough points"
@@ -193,6 +202,9 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook) -> di
             "instances": s.instances,
             "layout_components": comps,
             "vlm_layout_score": round(float(np.mean(s.vlm_scores)), 2) if s.vlm_scores else None,
+            "layout_realism": realism,
+            "layout_realism_components": realism_parts or None,
+            "layout_realism_reference": reference.source,
             "codes": len(codebook.centers),
             "dataset": s.spec or s.name,
         }

@@ -1,0 +1,99 @@
+"""Layout realism: arrangement statistics measured on point clouds, and the KS-based score."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from assist3d.errors import DataError
+from assist3d.metrics.realism import (STATS, RealismReference, RealismStats, _ks_to_quantiles, realism_score,
+                                      scene_stats)
+
+
+def _box_points(centre, size, yaw_deg, z0, rng, n=3000):
+    """Points on the surface of a box (uniform in its volume, then pushed to the faces)."""
+    p = rng.uniform(-0.5, 0.5, (n, 3))
+    axis = np.abs(p).argmax(1)
+    p[np.arange(n), axis] = np.sign(p[np.arange(n), axis]) * 0.5
+    p *= size
+    t = np.radians(yaw_deg)
+    rot = np.array([[np.cos(t), -np.sin(t), 0], [np.sin(t), np.cos(t), 0], [0, 0, 1]])
+    return p @ rot.T + np.array([centre[0], centre[1], z0 + size[2] / 2])
+
+
+def _room(objects, rng, w=5.0, d=4.0, h=2.6):
+    """A rectangular room (floor and four walls, no instance) with box objects (instances 1..)."""
+    pts = [np.c_[rng.uniform(0, w, 20000), rng.uniform(0, d, 20000), np.zeros(20000)]]
+    for x0, y0, x1, y1 in ((0, 0, w, 0), (w, 0, w, d), (w, d, 0, d), (0, d, 0, 0)):
+        t = rng.uniform(0, 1, 6000)
+        pts.append(np.c_[x0 + t * (x1 - x0), y0 + t * (y1 - y0), rng.uniform(0, h, 6000)])
+    inst = [np.full(sum(len(p) for p in pts), -1)]
+    for k, (centre, size, yaw, z0) in enumerate(objects, start=1):
+        b = _box_points(centre, size, yaw, z0, rng)
+        pts.append(b)
+        inst.append(np.full(len(b), k))
+    return np.concatenate(pts), np.concatenate(inst)
+
+
+def test_statistics_of_a_hand_made_room():
+    rng = np.random.default_rng(0)
+    coord, inst = _room([((1.0, 0.35), (1.6, 0.6, 0.8), 0.0, 0.0),     # a sideboard against the wall y = 0
+                         ((3.5, 2.0), (1.2, 0.5, 0.4), 30.0, 0.0),     # a bench turned 30 degrees, mid-room
+                         ((4.7, 3.0), (0.5, 0.1, 0.4), 0.0, 1.2)], rng)  # a wall shelf at 1.2 m
+    st = scene_stats(coord, inst).arrays()
+    assert st["wall_distance"][0] < 0.15 and st["wall_distance"][1] > 0.9
+    assert st["misalignment"][0] < 3 and abs(st["misalignment"][1] - 30) < 4
+    assert st["height"][0] < 0.05 and abs(st["height"][2] - 1.2) < 0.06
+    assert st["neighbour"][0] > 1.0  # the sideboard is far from both others
+    assert st["free_space"][1] == pytest.approx(1.0)  # nothing else around the bench
+    # three small objects in a 5 x 4 m room
+    assert 0.05 < st["coverage"][0] < 0.15
+    # the statistics do not depend on how densely the room was sampled
+    keep = rng.random(len(coord)) < 0.4
+    thin = scene_stats(coord[keep], inst[keep]).arrays()
+    for k in ("wall_distance", "misalignment", "height"):
+        assert np.allclose(thin[k], st[k], atol=0.06 if k != "misalignment" else 3)
+
+
+def test_score_is_high_for_the_same_distribution_and_falls_with_a_different_one():
+    rng = np.random.default_rng(1)
+    ref_stats, same, other = RealismStats(), RealismStats(), RealismStats()
+    for k in STATS:
+        ref_stats.values[k] = list(rng.normal(1.0, 0.3, 4000))
+        same.values[k] = list(rng.normal(1.0, 0.3, 800))
+        other.values[k] = list(rng.normal(1.6, 0.3, 800))
+    ref_stats.objects = same.objects = other.objects = 10
+    ref = RealismReference.from_stats(ref_stats, "toy")
+    s_same, parts, _ = realism_score(same, ref)
+    s_other, _, _ = realism_score(other, ref)
+    assert s_same > 93 and set(parts) == set(STATS)
+    assert s_other < 50
+    # the reference survives its JSON form
+    again = RealismReference.from_json(json.loads(json.dumps(ref.to_json())), "mem")
+    assert realism_score(same, again)[0] == s_same
+
+
+def test_ks_against_quantiles_matches_the_two_sample_statistic():
+    scipy_stats = pytest.importorskip("scipy.stats")
+    rng = np.random.default_rng(2)
+    a, b = rng.normal(0, 1, 600), rng.normal(0.4, 1.2, 200000)
+    q = np.quantile(b, np.linspace(0, 1, 101))
+    assert _ks_to_quantiles(a, q) == pytest.approx(scipy_stats.ks_2samp(a, b).statistic, abs=0.02)
+
+
+def test_no_objects_gives_no_score_and_bad_input_is_refused():
+    rng = np.random.default_rng(3)
+    coord, inst = _room([], rng)
+    score, _, why = realism_score(scene_stats(coord, inst), RealismReference.load())
+    assert score is None and "no labelled object" in why
+    with pytest.raises(DataError, match="expected"):
+        scene_stats(coord[:, :2], inst)
+    with pytest.raises(DataError, match="not a layout realism reference"):
+        RealismReference.from_json({"version": 1, "quantiles": {}}, "bad.json")
+
+
+def test_shipped_reference_loads():
+    ref = RealismReference.load()
+    assert set(ref.quantiles) == set(STATS) and ref.objects > 50
