@@ -28,7 +28,6 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Callable
 
-
 from ..assets.catalog import Catalog
 from ..config import GenerateConfig
 from ..contracts import AssetRecord, DroppedObject, PlacedInstance, SceneLayout
