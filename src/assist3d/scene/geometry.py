@@ -301,8 +301,15 @@ def footprints_overlap(cx: np.ndarray, cy: np.ndarray, cyaw: np.ndarray, chw: fl
 
 
 def z_overlap(z0: np.ndarray, z1: np.ndarray, boxes: dict[str, np.ndarray]) -> np.ndarray:
-    """(n, m) bool: height intervals [z0, z1] (n,) overlap those of ``boxes`` by more than 1 mm."""
-    return (np.minimum(z1[:, None], boxes["z1"][None]) - np.maximum(z0[:, None], boxes["z0"][None])) > 1e-3
+    """(n, m) bool: height intervals [z0, z1] (n,) overlap those of ``boxes`` by more than 1 mm, or
+    by more than half the thinner of the two when that is under 2 mm.
+
+    The 1 mm tolerance lets a box rest on another; without the second rule a 1 mm banknote and a
+    loaf on the same table (height overlap: the banknote's 1 mm) would not count as colliding.
+    """
+    overlap = np.minimum(z1[:, None], boxes["z1"][None]) - np.maximum(z0[:, None], boxes["z0"][None])
+    thinner = np.minimum((z1 - z0)[:, None], (boxes["z1"] - boxes["z0"])[None])
+    return overlap > np.minimum(1e-3, 0.5 * np.maximum(thinner, 1e-5))
 
 
 def boxes_collide(cx: np.ndarray, cy: np.ndarray, cyaw: np.ndarray, chw: float | np.ndarray, chd: float | np.ndarray,
