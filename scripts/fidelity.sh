@@ -11,7 +11,8 @@
 # generator, default 60), GENERATORS (default "assist3d randomrooms holodeck-style no-context
 # mesh-sampled"), ASSETS (catalog folder; the docs use Sweet Home 3D + the procedural library),
 # DEV (real scans, default ../shared/data/real/dev), THREADS (torch threads, default 2), LOADER_WORKERS
-# (example-building processes, default 1; the batches are the same for any number),
+# (example-building processes, default 0: on a 2-core machine a worker beside 2 torch threads slowed
+# training ~2x; the batches are the same for any number),
 # SKIP_REAL=1 to leave out the leave-one-room-out rows; TSDF=1 adds "assist3d-tsdf": the ASSIST-3D
 # preset with render.point_source=tsdf (ScanNet-like reconstructed surfaces; needs the [sim] extra),
 # the same scenes as "assist3d" (same seed and layouts), only the points differ.
@@ -25,7 +26,7 @@ GENERATORS=${GENERATORS:-"assist3d randomrooms holodeck-style no-context mesh-sa
 HERE="$(cd "$(dirname "$0")/.." && pwd)"
 DEV=${DEV:-$HERE/../shared/data/real/dev}
 THREADS=${THREADS:-2}
-LOADER_WORKERS=${LOADER_WORKERS:-1}
+LOADER_WORKERS=${LOADER_WORKERS:-0}
 if [[ -z "${ASSIST3D:-}" ]]; then
   if command -v assist3d >/dev/null 2>&1; then ASSIST3D=assist3d; else ASSIST3D="$HERE/.venv/bin/assist3d"; fi
 fi

@@ -2,12 +2,14 @@
 
     python scripts/realism_reference.py array:../shared/data/real/dev --out src/assist3d/resources/realism/scannet-dev.json
     python scripts/realism_reference.py array:../shared/data/real/dev --loro [--json]
+    python scripts/realism_reference.py array:../shared/data/real/dev --score assist3d:DATA/a assist3d:DATA/b [--max-scenes 50]
 
 ``--out`` writes the quantiles of every statistic of ``assist3d.metrics.realism`` over the given
 scans (derived statistics only: no point of a scan is stored). ``--loro`` scores each room against a
 reference built from the other rooms (rescans of a room share the first 9 characters of their
 name, as in ScanNet), which is how a real scan's score should be read: a scan scored against a
-reference that contains it scores near 100 by construction.
+reference that contains it scores near 100 by construction. ``--score`` scores other datasets
+against the reference built from the given scans (as ``assist3d metrics --realism-reference``).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from pathlib import Path
 
 from assist3d.data import open_dataset
 from assist3d.fileio import write_json_atomic
-from assist3d.metrics.realism import RealismReference, RealismStats, realism_score, scene_stats
+from assist3d.metrics.realism import RealismReference, RealismStats, realism_score, scene_stats, stats_of_dataset
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -26,6 +28,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("spec", help="labelled real scans, FORMAT:PATH")
     ap.add_argument("--out", type=Path, help="write the reference JSON here")
     ap.add_argument("--loro", action="store_true", help="score each room against the other rooms")
+    ap.add_argument("--score", nargs="+", default=[], help="datasets FORMAT:PATH to score against the reference")
+    ap.add_argument("--max-scenes", type=int, default=None, help="first N scenes of each --score dataset")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     ds = open_dataset(args.spec)
@@ -50,6 +54,17 @@ def main(argv: list[str] | None = None) -> int:
         report["loro"] = rows
         scores = [v["layout_realism"] for v in rows.values() if v["layout_realism"] is not None]
         report["loro_mean"] = round(sum(scores) / len(scores), 2) if scores else None
+    if args.score:
+        total = RealismStats()
+        for st in per_scene.values():
+            total.add(st)
+        ref = RealismReference.from_stats(total, args.spec)
+        report["scores"] = {}
+        for spec in args.score:
+            st = stats_of_dataset(spec, args.max_scenes)
+            score, parts, why = realism_score(st, ref)
+            report["scores"][spec] = {"layout_realism": score, "components": parts, "reason": why,
+                                      "scenes": st.scenes, "objects": st.objects}
     if args.json:
         print(json.dumps(report, indent=2))
     else:
@@ -57,6 +72,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{r}: {v['layout_realism']}  ({v['objects']} objects) {v['components']}")
         if "loro_mean" in report:
             print(f"mean over rooms: {report['loro_mean']}")
+        for spec, v in (report.get("scores") or {}).items():
+            print(f"{spec}: {v['layout_realism']}  ({v['scenes']} scenes, {v['objects']} objects) {v['components']}")
         if "reference" in report:
             print(f"reference written to {report['reference']['out']} ({report['reference']['objects']} objects)")
     return 0
