@@ -84,16 +84,13 @@ def _fake_random(request, catalog, *, cfg, rng, next_id):
     return _fake_place(request, plan, catalog, cfg=cfg, rng=rng, next_id=next_id)
 
 
+STANDIN = layout_mod.Placer(_fake_place, _fake_random)
+
+
 @pytest.fixture(params=["standin", "real"])
-def placement(request, monkeypatch):
-    if request.param == "standin":
-        monkeypatch.setattr(layout_mod, "_placement_api", lambda: (_fake_place, _fake_random))
-    else:
-        try:
-            layout_mod._placement_api()
-        except ImportError:
-            pytest.skip("placement engine not available")
-    return request.param
+def placement(request):
+    """The placer a test's layouts use: the stand-in above or the real engine."""
+    return STANDIN if request.param == "standin" else layout_mod.Placer()
 
 
 def _cfg(**sel) -> GenerateConfig:
@@ -114,9 +111,9 @@ def _strip_timing(d: dict) -> dict:
 def test_same_seed_same_json_and_contract(tmp_path, placement):
     cat = make_catalog(tmp_path / "cat")
     cfg = _cfg()
-    a = build_layout(cat, cfg, 11, scene_index=1)
-    b = build_layout(cat, cfg, 11, scene_index=1)
-    c = build_layout(cat, cfg, 12, scene_index=1)
+    a = build_layout(cat, cfg, 11, scene_index=1, placer=placement)
+    b = build_layout(cat, cfg, 11, scene_index=1, placer=placement)
+    c = build_layout(cat, cfg, 12, scene_index=1, placer=placement)
     ja = a.to_json()
     assert _strip_timing(ja) == _strip_timing(b.to_json())
     assert _strip_timing(ja) != _strip_timing(c.to_json())
@@ -144,7 +141,7 @@ def test_same_seed_same_json_and_contract(tmp_path, placement):
 def test_room_smaller_than_every_object_drops_with_reasons(tmp_path, placement):
     cat = make_catalog(tmp_path / "cat")
     cfg = _cfg().model_copy(update={"room": _cfg().room.model_copy(update={"area_min": 0.04, "area_max": 0.05})})
-    lay = build_layout(cat, cfg, 3)
+    lay = build_layout(cat, cfg, 3, placer=placement)
     assert lay.instances == ()
     assert len(lay.dropped) == sum(lay.stats["selected"].values())
     assert all(d.reason for d in lay.dropped)
@@ -169,7 +166,7 @@ class _BadPlanner:
 
 def test_broken_plan_is_repaired_not_raised(tmp_path, placement):
     cat = make_catalog(tmp_path / "cat")
-    lay = build_layout(cat, _cfg(), 5, planner=_BadPlanner())
+    lay = build_layout(cat, _cfg(), 5, planner=_BadPlanner(), placer=placement)
     reasons = [d.reason for d in lay.dropped if d.group == "floor"]
     assert any("unknown or later object 99" in r for r in reasons)
     notes = " | ".join(lay.stats["notes"])
@@ -191,29 +188,27 @@ def test_sanitise_plan_unit():
     assert dropped == [] and len(notes) == 3  # duplicate, out of range, missing object 1
 
 
-def test_randomrooms_mode_uses_random_placement(tmp_path, monkeypatch):
+def test_randomrooms_mode_uses_random_placement(tmp_path):
     calls = []
 
     def spy_random(request, catalog, *, cfg, rng, next_id):
         calls.append(request.group)
         return _fake_random(request, catalog, cfg=cfg, rng=rng, next_id=next_id)
 
-    monkeypatch.setattr(layout_mod, "_placement_api", lambda: (_fake_place, spy_random))
     cat = make_catalog(tmp_path / "cat")
     from assist3d.presets import apply_preset
 
     cfg = apply_preset({}, "randomrooms")
-    lay = build_layout(cat, cfg, 2)
+    lay = build_layout(cat, cfg, 2, placer=layout_mod.Placer(_fake_place, spy_random))
     assert calls == ["floor"] and lay.planner == {"floor": "none"}
     assert all(i.group == "floor" for i in lay.instances)
 
 
-def test_topdown_png(tmp_path, monkeypatch):
+def test_topdown_png(tmp_path):
     from assist3d.scene.topdown import render_topdown
 
     cat = make_catalog(tmp_path / "cat")
-    monkeypatch.setattr(layout_mod, "_placement_api", lambda: (_fake_place, _fake_random))
-    lay = build_layout(cat, _cfg(), 4)
+    lay = build_layout(cat, _cfg(), 4, placer=STANDIN)
     out = tmp_path / "l.png"
     render_topdown(lay, cat, out, title="t")
     data = out.read_bytes()
@@ -222,10 +217,6 @@ def test_topdown_png(tmp_path, monkeypatch):
 
 def test_cli_layout_and_layout_png(tmp_path):
     pytest.importorskip("assist3d.scene.assemble")
-    try:
-        layout_mod._placement_api()
-    except ImportError:
-        pytest.skip("placement engine not available")
     from typer.testing import CliRunner
 
     from assist3d.cli import app
@@ -272,10 +263,6 @@ def test_holodeck_style_room_places_repeated_models(tmp_path):
     (copies of one model) are placed as distinct instances, the room type is recorded."""
     from assist3d.presets import apply_preset
 
-    try:
-        layout_mod._placement_api()
-    except ImportError:
-        pytest.skip("placement engine not available")
     cat = make_catalog(tmp_path / "cat")
     cfg = apply_preset({"selection": {"room_types": ["bedroom"], "assets_per_class": None},
                         "layout": {"group_budget_s": 30.0, "max_backtracks": 200}}, "holodeck-style")

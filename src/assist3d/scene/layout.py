@@ -34,6 +34,7 @@ from ..contracts import AssetRecord, DroppedObject, PlacedInstance, SceneLayout
 from ..errors import AssistError
 from ..records import PLAN_COUNTERS
 from ..rng import make_rng
+from .placement import PlacementResult, place_group, place_group_random
 from .planners import make_planner
 from .relations import GroupPlan, Planner, PlanRequest, review_plan
 from .room import sample_room
@@ -45,11 +46,15 @@ log = logging.getLogger(__name__)
 MAX_NOTES = 50
 
 
-def _placement_api() -> tuple[Callable, Callable]:
-    """(place_group, place_group_random) of the placement engine (imported on first use)."""
-    from .placement import place_group, place_group_random
+@dataclass(frozen=True)
+class Placer:
+    """The placement engine a layout uses: ``place`` for planned groups (bounded depth-first search)
+    and ``place_random`` for the RandomRooms-style baseline; both take ``(request, [plan,] catalog,
+    *, cfg, rng, next_id)`` and return a :class:`~assist3d.scene.placement.PlacementResult`.
+    Tests pass stand-ins to :func:`build_layout`."""
 
-    return place_group, place_group_random
+    place: Callable[..., PlacementResult] = place_group
+    place_random: Callable[..., PlacementResult] = place_group_random
 
 
 def sanitise_plan(plan: GroupPlan, request: PlanRequest) -> tuple[GroupPlan, list[DroppedObject], list[str]]:
@@ -89,6 +94,7 @@ class _Run:
     seed: int
     planner: Planner
     room: object
+    placer: Placer
     instances: list[PlacedInstance] = field(default_factory=list)
     dropped: list[DroppedObject] = field(default_factory=list)
     planners: dict = field(default_factory=dict)
@@ -144,7 +150,6 @@ class _Run:
                   random_mode: bool, planned: _Planned | None = None) -> list[int | None]:
         """Plan (unless ``planned`` holds its plan) and place one group. Returns, for each object,
         the id of its placed instance or None."""
-        place_group, place_group_random = _placement_api()
         t0 = time.perf_counter()
         placed_before = tuple(self.instances)
         # the placement sees every instance so far (collisions with wall shelves above a table...);
@@ -159,8 +164,8 @@ class _Run:
         try:
             if random_mode:
                 self.planners[group] = "none"
-                result = place_group_random(request, self.catalog, cfg=self.cfg.layout, rng=place_rng,
-                                            next_id=self.next_id)
+                result = self.placer.place_random(request, self.catalog, cfg=self.cfg.layout, rng=place_rng,
+                                                  next_id=self.next_id)
             else:
                 plan = self.record_plan(planned if planned is not None else self.plan_ahead(plan_request))
                 self.notes.extend(plan.notes)
@@ -168,8 +173,8 @@ class _Run:
                 self.notes.extend(notes)
                 self.planners[group] = plan.planner
                 order = [p.source for p in plan.order]
-                result = place_group(request, plan, self.catalog, cfg=self.cfg.layout, rng=place_rng,
-                                     next_id=self.next_id)
+                result = self.placer.place(request, plan, self.catalog, cfg=self.cfg.layout, rng=place_rng,
+                                           next_id=self.next_id)
         except AssistError as e:
             reason = f"placement failed: {e}"
             self.dropped.extend(DroppedObject(r.id, group, reason) for r in objects)
@@ -218,20 +223,22 @@ class _Run:
 
 
 def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_index: int = 0,
-                 planner: Planner | None = None) -> SceneLayout:
+                 planner: Planner | None = None, placer: Placer | None = None) -> SceneLayout:
     """One scene's layout. The same (catalog, cfg, seed, scene_index) gives the same layout
     (timings aside: ``stats["timing"]`` holds wall seconds of the selection as ``"select"``, of
-    each group by its name and of LLM calls as ``"llm_seconds"``). ``planner`` defaults to :func:`~assist3d.scene.planners.make_planner`."""
+    each group by its name and of LLM calls as ``"llm_seconds"``). ``planner`` defaults to
+    :func:`~assist3d.scene.planners.make_planner`, ``placer`` to the placement engine."""
     t0 = time.perf_counter()
     planner = planner if planner is not None else make_planner(cfg)
     room = sample_room(cfg.room, make_rng(seed, "room"))
-    propose = None
+    propose: Callable | None = None
     if cfg.selection.strategy == "room-type" and hasattr(planner, "propose_room"):
-        def propose(room_type: str, vocab: dict[str, tuple[str, ...]]):
+        def ask_planner(room_type: str, vocab: dict[str, tuple[str, ...]]):
             return planner.propose_room(room_type, room, vocab)
+        propose = ask_planner
     sel: Selection = select_objects(catalog, cfg.selection, make_rng(seed, "select"), scene_index=scene_index,
                                     propose=propose)
-    run = _Run(catalog, cfg, seed, planner, room)
+    run = _Run(catalog, cfg, seed, planner, room, placer if placer is not None else Placer())
     uses_llm = not isinstance(planner, RulePlanner)
     if uses_llm and cfg.llm.scene_budget_s is not None:
         run.budget_s = cfg.llm.scene_budget_s
