@@ -21,7 +21,7 @@ $(VENV)/.core: pyproject.toml | $(BIN)/activate
 
 $(VENV)/.full: pyproject.toml | $(BIN)/activate
 	$(BIN)/pip install -q "torch==2.13.0"
-	$(BIN)/pip install -q -e ".[dev,train,llm,sim]"
+	$(BIN)/pip install -q -e ".[dev,train,llm,sim,ray]"
 	touch $@ $(VENV)/.core
 
 setup: $(VENV)/.core

@@ -7,11 +7,13 @@ everywhere, so it can be regenerated alone and equals the same scene of a full r
 
 from __future__ import annotations
 
+import json
 import logging
 import multiprocessing as mp
 import os
 import re
 import shutil
+import socket
 import time
 from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import dataclass
@@ -27,6 +29,7 @@ from .bounds import MAX_WORKERS, check_render_memory, check_scene_indices
 from .errors import AssistError, ConfigError, FaultError, describe_os_error, fault_advice, shown
 from .export import Manifest, read_scene_meta, write_scene
 from .export.writer import remove_stale_temps
+from . import raybackend
 from .interrupts import Interrupted, worker_pool
 from .records import STAGES, LLMUsage, SceneRecord, StageTimings, stage_timings
 from .rng import make_rng, scene_seed
@@ -143,6 +146,22 @@ def _run_job(job: SceneJob) -> dict:
     return _WORKER.scene(job)
 
 
+_RAY_WORKERS: dict[tuple[str, int], Generator] = {}
+
+
+def _scene_in_ray_worker(cfg_json: dict, threads: int, job: SceneJob) -> tuple[dict, str]:
+    """One scene in a Ray worker process; the catalog is opened once per process and config."""
+    from .config import parse_config
+
+    key = (json.dumps(cfg_json, sort_keys=True), threads)
+    gen = _RAY_WORKERS.get(key)
+    if gen is None:
+        for var in THREAD_ENV:
+            os.environ.setdefault(var, "1")
+        gen = _RAY_WORKERS[key] = Generator(parse_config(cfg_json), threads=threads)
+    return gen.scene(job), socket.gethostname()
+
+
 # ------------------------------------------------------------------------------------------
 # the dataset loop
 # ------------------------------------------------------------------------------------------
@@ -159,6 +178,7 @@ class DatasetRun:
     manifest: Manifest
     failed_checks: list[str]
     errors: list[str]  # scenes that raised an AssistError (not written; a re-run retries them)
+    cluster: dict | None = None  # --backend ray: nodes, scenes per node, throughput (raybackend.ClusterStats)
 
 
 LOCK_NAME = ".generate.lock"
@@ -213,8 +233,13 @@ def _existing_scenes(out: Path) -> list[int]:
 def generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int], *, workers: int = 1,
                      verify: bool = False,
                      on_scene: Callable[[dict, bool], None] | None = None,
-                     on_start: Callable[[int, int], None] | None = None) -> DatasetRun:
+                     on_start: Callable[[int, int], None] | None = None,
+                     backend: str = "local", ray_address: str | None = None) -> DatasetRun:
     """Generate scenes ``indices`` into ``out``; complete scenes already there are kept.
+
+    ``backend="ray"`` runs every scene as a task on a Ray cluster (:mod:`assist3d.raybackend`;
+    ``ray_address`` None = Ray's own discovery, else HOST:PORT); ``workers`` is then unused. The
+    files are the same bytes as with ``workers=1``; ``out`` must be on storage every node sees.
 
     ``on_start(total, already_done)`` is called once, ``on_scene(meta, skipped)`` after every
     scene. The resolved config is saved as ``out/config.yaml``, the manifest as
@@ -227,7 +252,7 @@ def generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int
     indices = list(indices)
     try:
         return _generate_dataset(cfg, out, indices, workers=workers, verify=verify, on_scene=on_scene,
-                                 on_start=on_start)
+                                 on_start=on_start, backend=backend, ray_address=ray_address)
     except Interrupted as e:
         raise Interrupted(e.signum, _progress_line(Path(out), indices, cfg.seed)) from None
     except OSError as e:  # disk full, read-only, permissions: say what is complete and how to go on
@@ -238,9 +263,14 @@ def generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int
 
 def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[int], *, workers: int,
                       verify: bool, on_scene: Callable[[dict, bool], None] | None,
-                      on_start: Callable[[int, int], None] | None) -> DatasetRun:
+                      on_start: Callable[[int, int], None] | None, backend: str = "local",
+                      ray_address: str | None = None) -> DatasetRun:
+    if backend not in ("local", "ray"):
+        raise ConfigError(f"--backend must be local or ray, got {backend!r}")
     if not 1 <= workers <= MAX_WORKERS:
         raise ConfigError(f"--workers must be 1..{MAX_WORKERS}, got {workers}")
+    if backend == "ray":
+        workers = 1  # the cluster decides; the driver opens the catalog once for the manifest
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out {out}: exists and is not a folder")
@@ -253,7 +283,8 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
         os.environ.setdefault(var, "1")
     cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     threads = max(1, min(cfg.render.threads, cpus // workers)) if workers > 1 else cfg.render.threads
-    gen = Generator(cfg) if workers == 1 else None  # in-process: open the catalog once, here
+    started_ray = raybackend.connect(ray_address) if backend == "ray" else False  # before anything is written
+    gen = Generator(cfg) if workers == 1 and backend == "local" else None  # in-process: open the catalog once
     if gen is not None:
         classes, assets_label = gen.classes, gen.assets_label
     else:
@@ -316,15 +347,24 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
             errors.append(scene_name(index))
 
         jobs = [SceneJob(i, str(out), verify) for i in todo]
+        cluster = None
         try:
-            if gen is not None:
+            if backend == "ray":
+                if jobs:
+                    stats = raybackend.run_scenes(_scene_in_ray_worker, (cfg_dict, 1), jobs, done, fail, out=out,
+                                                  address=ray_address)
+                    cluster = stats.as_dict()
+            elif gen is not None:
                 _run_in_process(gen, jobs, done, fail)
             elif jobs:
                 _run_in_pool(jobs, workers, cfg_dict, threads, done, fail)
-        except (Interrupted, OSError):  # half-written scenes go (freeing their space), complete ones stay
+        except (Interrupted, OSError, KeyboardInterrupt):  # half-written scenes go, complete ones stay
             _discard_unfinished(out, todo)
             raise
-        return DatasetRun(out, indices, skipped, generated, manifest, failed, errors)
+        finally:
+            if backend == "ray":
+                raybackend.disconnect(started_ray)
+        return DatasetRun(out, indices, skipped, generated, manifest, failed, errors, cluster)
 
 
 def _run_in_process(gen: Generator, jobs: list[SceneJob], done: Callable[[dict], None],

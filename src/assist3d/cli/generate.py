@@ -84,6 +84,12 @@ def register(app: typer.Typer) -> None:
                                             help=f"Number of scenes from --start (at most {MAX_SCENES:,})."),
         verify: bool = typer.Option(False, "--verify", help="Re-cast rays and check every scene's labels."),
         as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+        backend: str = typer.Option("local", "--backend", help="local (worker processes on this machine) or ray "
+                                                               "(one task per scene on a Ray cluster; needs the "
+                                                               "[ray] extra and --out on storage every node sees)."),
+        ray_address: Optional[str] = typer.Option(None, "--ray-address", help="Ray cluster HOST:PORT or "
+                                                  "ray://HOST:PORT (default: Ray's discovery, else a new local "
+                                                  "Ray)."),
     ) -> None:
         """Generate a dataset: one Pointcept-layout folder per scene plus manifest.json."""
         from rich.console import Console
@@ -134,14 +140,19 @@ def register(app: typer.Typer) -> None:
                 bar.update(task, advance=1, stages=f"s/scene: {stages}")
 
             run = generate_dataset(cfg, out, indices, workers=workers, verify=verify, on_scene=on_scene,
-                                   on_start=on_start)
+                                   on_start=on_start, backend=backend, ray_address=ray_address)
         if as_json:
             sys.stdout.write(json.dumps({
                 "out": str(out), "scenes": len(indices), "generated": len(run.generated), "skipped": len(run.skipped),
                 "stages": _stage_means(run.generated), "failed_checks": run.failed_checks,
-                "errors": run.errors}) + "\n")
+                "errors": run.errors, **({"cluster": run.cluster} if run.cluster else {})}) + "\n")
         else:
             _summary_table(run, Console())
+            if run.cluster:
+                c = run.cluster
+                nodes = ", ".join(f"{n} {v['scenes']} ({v['scenes_per_minute']}/min)" for n, v in c["per_node"].items())
+                Console().print(f"ray: {c['scenes']} scenes in {c['seconds']} s on {c['nodes']} node(s), "
+                                f"{c['cpus']:g} CPUs: {c['scenes_per_minute']} scenes/min; per node: {nodes}")
         if run.failed_checks:
             log.error("label check failed for %d scenes: %s", len(run.failed_checks), ", ".join(run.failed_checks))
         if run.errors:
