@@ -99,6 +99,8 @@ def register(app: typer.Typer) -> None:
         from ..pipeline import generate_dataset
         from ..presets import compose
 
+        if backend not in ("local", "ray"):
+            raise ConfigError(f"--backend must be local or ray, got {backend!r}")
         overrides: dict = {}
         if seed is not None:
             overrides["seed"] = seed
