@@ -83,7 +83,10 @@ class RealismStats:
 def _voxel_points(coord: np.ndarray, instance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """One point per occupied voxel (the voxel's mean) with its most frequent instance id (-1 = none)."""
     keys = np.floor(coord / VOXEL).astype(np.int64)
-    _, inv, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    keys -= keys.min(0)
+    span = keys.max(0) + 1
+    flat = (keys[:, 0] * span[1] + keys[:, 1]) * span[2] + keys[:, 2]  # one integer per voxel: a fast 1-D unique
+    _, inv, counts = np.unique(flat, return_inverse=True, return_counts=True)
     inv = inv.reshape(-1)
     n = len(counts)
     centres = np.stack([np.bincount(inv, weights=coord[:, a], minlength=n) for a in range(3)], 1) / counts[:, None]
@@ -165,6 +168,9 @@ def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
 
     obj_xy = {int(o): pts[inst == o, :2] for o in objects}
     trees = {o: cKDTree(xy) for o, xy in obj_xy.items()}
+    order = list(obj_xy)
+    lo_xy = np.array([obj_xy[o].min(0) for o in order]).reshape(-1, 2)
+    hi_xy = np.array([obj_xy[o].max(0) for o in order]).reshape(-1, 2)
     ring = int(round(RING / CELL))
     for o, xy in obj_xy.items():
         out.objects += 1
@@ -178,9 +184,16 @@ def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
             ang = np.degrees(np.arctan2(vec[1, 1], vec[0, 1])) % 90.0
             diff = abs(ang - room_angle) % 90.0
             out.values["misalignment"].append(float(min(diff, 90.0 - diff)))
-        others = [t for p, t in trees.items() if p != o]
-        if others:
-            out.values["neighbour"].append(float(min(t.query(xy, k=1)[0].min() for t in others)))
+        if len(order) > 1:  # nearest other object: visit them by box distance, stop when no box can be closer
+            k = order.index(o)
+            gap = np.linalg.norm(np.maximum(0.0, np.maximum(lo_xy - hi_xy[k], lo_xy[k] - hi_xy)), axis=1)
+            gap[k] = np.inf
+            best = np.inf
+            for j in np.argsort(gap, kind="stable"):
+                if gap[j] >= best:
+                    break
+                best = min(best, float(trees[order[j]].query(xy, k=1)[0].min()))
+            out.values["neighbour"].append(best)
         # free space: cells within RING of the footprint (not in it) covered by another object
         mine = cell_sets[o]
         ci, cj = np.divmod(mine, shape[1])
