@@ -245,7 +245,7 @@ class LLMConfig(_Section):
                                                       "give the same layout either way.")
     scene_budget_s: float | None = Field(None, gt=0, le=86400, description="LLM planning time per scene, s: groups "
                                          "whose planning starts later are planned by the rules (recorded in "
-                                         "layout.json); None = no limit.")
+                                         "layout.json); None = no limit; at most 86400.")
     cache_dir: str | None = Field(None, description="Response cache folder; None = <cache>/llm.")
     json_mode: bool = Field(True, description="Ask for response_format json_object (dropped silently when the "
                                               "server rejects it).")
