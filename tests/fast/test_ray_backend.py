@@ -43,7 +43,9 @@ def _ray(*args: str, env: dict) -> None:
 @pytest.fixture(scope="module")
 def cache_env(tmp_path_factory):
     cache = str(tmp_path_factory.getbasetemp() / "assist3d-cache")
-    env = {**os.environ, "ASSIST3D_CACHE": cache, "RAY_USAGE_STATS_ENABLED": "0"}
+    # RAY_AUTH_MODE: a token left in ~/.ray by an earlier local ray.init() turns token auth on for a
+    # new head but not for a node joining it; this test cluster lives on loopback only
+    env = {**os.environ, "ASSIST3D_CACHE": cache, "RAY_USAGE_STATS_ENABLED": "0", "RAY_AUTH_MODE": "disabled"}
     env.pop("ASSIST3D_ASSETS", None)
     env.pop("RAY_ADDRESS", None)
     return env
@@ -77,6 +79,7 @@ def reference(tmp_path_factory, cache_env):
 def _ray_run(out: Path, address: str, cache_env: dict, **kw):
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("ASSIST3D_CACHE", cache_env["ASSIST3D_CACHE"])
+        mp.setenv("RAY_AUTH_MODE", "disabled")
         mp.delenv("ASSIST3D_ASSETS", raising=False)
         return generate_dataset(parse_config(TINY), out, range(SCENES), backend="ray", ray_address=address, **kw)
 
