@@ -35,10 +35,10 @@ def main(argv: list[str] | None = None) -> int:
     ds = open_dataset(args.spec)
     per_scene = {sid: scene_stats(s.coord, s.instance) for sid, s in ((i, ds.load(i)) for i in ds.scene_ids)}
     report: dict = {"spec": args.spec, "scenes": len(per_scene)}
+    total = RealismStats()
+    for st in per_scene.values():
+        total.add(st)
     if args.out:
-        total = RealismStats()
-        for st in per_scene.values():
-            total.add(st)
         ref = RealismReference.from_stats(total, f"{len(per_scene)} real scans ({args.spec.split('/')[-1] or args.spec})")
         write_json_atomic(args.out, ref.to_json())
         report["reference"] = {"out": str(args.out), "objects": total.objects}
@@ -55,9 +55,6 @@ def main(argv: list[str] | None = None) -> int:
         scores = [v["layout_realism"] for v in rows.values() if v["layout_realism"] is not None]
         report["loro_mean"] = round(sum(scores) / len(scores), 2) if scores else None
     if args.score:
-        total = RealismStats()
-        for st in per_scene.values():
-            total.add(st)
         ref = RealismReference.from_stats(total, args.spec)
         report["scores"] = {}
         for spec in args.score:

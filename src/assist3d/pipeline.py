@@ -146,20 +146,19 @@ def _run_job(job: SceneJob) -> dict:
     return _WORKER.scene(job)
 
 
-_RAY_WORKERS: dict[tuple[str, int], Generator] = {}
+_WORKER_KEY: str | None = None
 
 
 def _scene_in_ray_worker(cfg_json: dict, threads: int, job: SceneJob) -> tuple[dict, str]:
-    """One scene in a Ray worker process; the catalog is opened once per process and config."""
-    from .config import parse_config
-
-    key = (json.dumps(cfg_json, sort_keys=True), threads)
-    gen = _RAY_WORKERS.get(key)
-    if gen is None:
+    """One scene in a Ray worker process: the local pool's worker, opened once per process and config."""
+    global _WORKER_KEY
+    key = json.dumps([cfg_json, threads], sort_keys=True)
+    if _WORKER is None or key != _WORKER_KEY:
         for var in THREAD_ENV:
             os.environ.setdefault(var, "1")
-        gen = _RAY_WORKERS[key] = Generator(parse_config(cfg_json), threads=threads)
-    return gen.scene(job), socket.gethostname()
+        _init_worker(cfg_json, threads)
+        _WORKER_KEY = key
+    return _run_job(job), socket.gethostname()
 
 
 # ------------------------------------------------------------------------------------------
@@ -283,7 +282,8 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
         os.environ.setdefault(var, "1")
     cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     threads = max(1, min(cfg.render.threads, cpus // workers)) if workers > 1 else cfg.render.threads
-    started_ray = raybackend.connect(ray_address) if backend == "ray" else False  # before anything is written
+    if backend == "ray":
+        raybackend.connect(ray_address)  # before anything is written
     gen = Generator(cfg) if workers == 1 and backend == "local" else None  # in-process: open the catalog once
     if gen is not None:
         classes, assets_label = gen.classes, gen.assets_label
@@ -363,7 +363,7 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
             raise
         finally:
             if backend == "ray":
-                raybackend.disconnect(started_ray)
+                raybackend.disconnect()
         return DatasetRun(out, indices, skipped, generated, manifest, failed, errors, cluster)
 
 

@@ -93,16 +93,15 @@ def check_address(address: str | None, timeout_s: float = CONNECT_TIMEOUT_S) -> 
                           f"running there (`ray start --head --port {port}`)?") from None
 
 
-def connect(address: str | None) -> bool:
-    """Connect this process to Ray; True when this call started (and must stop) a local Ray."""
+def connect(address: str | None) -> None:
+    """Connect this process to Ray (starting a local instance when there is no cluster)."""
     try:
         import ray
     except ImportError:
         raise ConfigError("--backend ray needs Ray: pip install 'assist3d[ray]'") from None
     check_address(address)
     if ray.is_initialized():
-        return False
-    started_local = address is None and not os.environ.get("RAY_ADDRESS") and not _local_cluster_running()
+        return
     t0 = time.monotonic()
     try:
         # the workers see this process's ASSIST3D_* settings (catalog and cache folders)
@@ -111,23 +110,12 @@ def connect(address: str | None) -> bool:
                  log_to_driver=False, configure_logging=False, runtime_env={"env_vars": env} if env else None)
     except (ConnectionError, RuntimeError, ValueError) as e:
         raise ConfigError(f"--ray-address {address or 'auto'}: cannot connect to Ray ({e})") from None
-    log.info("ray: connected in %.1f s (%s)", time.monotonic() - t0, "new local instance" if started_local
-             else (address or os.environ.get("RAY_ADDRESS") or "running local cluster"))
-    return started_local
+    log.info("ray: connected in %.1f s (%s)", time.monotonic() - t0,
+             address or os.environ.get("RAY_ADDRESS") or "auto: a running local cluster or a new instance")
 
 
-def _local_cluster_running() -> bool:
-    try:
-        from ray._private.services import find_gcs_addresses  # private: only a hint for the log line
-    except ImportError:
-        return False
-    try:
-        return bool(find_gcs_addresses())
-    except Exception:  # noqa: BLE001 - a failed hint changes only a log line
-        return False
-
-
-def disconnect(started_local: bool) -> None:
+def disconnect() -> None:
+    """Leave the cluster (a local instance started by :func:`connect` stops with it)."""
     import ray
 
     if ray.is_initialized():

@@ -172,6 +172,9 @@ def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
     lo_xy = np.array([obj_xy[o].min(0) for o in order]).reshape(-1, 2)
     hi_xy = np.array([obj_xy[o].max(0) for o in order]).reshape(-1, 2)
     ring = int(round(RING / CELL))
+    di, dj = np.mgrid[-ring:ring + 1, -ring:ring + 1]
+    disc = (di * di + dj * dj) <= ring * ring
+    di, dj = di[disc], dj[disc]  # cell offsets within RING, computed once for every object
     for o, xy in obj_xy.items():
         out.objects += 1
         z = pts[inst == o, 2]
@@ -197,17 +200,10 @@ def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
         # free space: cells within RING of the footprint (not in it) covered by another object
         mine = cell_sets[o]
         ci, cj = np.divmod(mine, shape[1])
-        near = set()
-        for di in range(-ring, ring + 1):
-            for dj in range(-ring, ring + 1):
-                if di * di + dj * dj > ring * ring:
-                    continue
-                ii, jj = ci + di, cj + dj
-                ok = (ii >= 0) & (jj >= 0) & (ii < shape[0]) & (jj < shape[1])
-                near.update((ii[ok] * shape[1] + jj[ok]).tolist())
-        near.difference_update(mine.tolist())
-        if near:
-            idx = np.fromiter(near, np.int64)
+        ii, jj = (ci[:, None] + di).ravel(), (cj[:, None] + dj).ravel()
+        ok = (ii >= 0) & (jj >= 0) & (ii < shape[0]) & (jj < shape[1])
+        idx = np.setdiff1d(ii[ok] * shape[1] + jj[ok], mine)
+        if len(idx):
             taken = obj_cells[idx] > 0
             out.values["free_space"].append(float(1.0 - taken.mean()))
     return out
