@@ -9,18 +9,25 @@ from __future__ import annotations
 
 import difflib
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
+import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from .errors import ConfigError
+from .errors import ConfigError, shown
+from .fileio import write_text_atomic
+from .scene.roomtypes import ROOM_TEMPLATES
 
 
-class _Section(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)  # NaN/inf: never wanted
+class Section(BaseModel):
+    """The base of every configuration schema: generation (here), training (:mod:`assist3d.engine.config`)
+    and the CPU segmenter (:mod:`assist3d.segmenter.config`). Unknown keys are refused (with the closest
+    known key, see :func:`validate_config`), assignments are validated, NaN and infinity are refused."""
+
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)
 
 
-class AssetsConfig(_Section):
+class AssetsConfig(Section):
     """Where assets come from."""
 
     library: str | None = Field(None, description="Catalog folder; None = $ASSIST3D_ASSETS or the default cache folder, "
@@ -32,7 +39,7 @@ class AssetsConfig(_Section):
                                                                     "(0..2^32-1).")
 
 
-class RoomConfig(_Section):
+class RoomConfig(Section):
     """Room shell sampling (ScanNet-like rooms)."""
 
     area_min: float = Field(10.0, gt=0, le=1000, description="Smallest floor area, m^2, at most 1000 (ScanNet rooms: "
@@ -47,7 +54,7 @@ class RoomConfig(_Section):
     ceiling: bool = Field(False, description="Build a ceiling (real scans rarely capture it; off by default).")
 
 
-class SelectionConfig(_Section):
+class SelectionConfig(Section):
     """Heterogeneous object selection (paper section 'Heterogeneous Object Selection')."""
 
     floor_count: int = Field(100, ge=0, le=10_000, description="M1: floor objects sampled per scene, at most 10,000 "
@@ -102,8 +109,6 @@ class SelectionConfig(_Section):
     @field_validator("room_types")
     @classmethod
     def _known_room_types(cls, v: list[str] | None) -> list[str] | None:
-        from .scene.roomtypes import ROOM_TEMPLATES
-
         if v is not None:
             unknown = [t for t in v if t not in ROOM_TEMPLATES]
             if unknown or not v:
@@ -111,7 +116,7 @@ class SelectionConfig(_Section):
         return v
 
 
-class LayoutConfig(_Section):
+class LayoutConfig(Section):
     """Relation planning and depth-first placement (paper section 'Scene Layout Generation')."""
 
     planner: Literal["rules", "llm", "none"] = Field("rules", description="Relation planner: rule-based (default), "
@@ -146,7 +151,7 @@ class LayoutConfig(_Section):
                                                 "group's search settles for its best (paper: n/a).")
 
 
-class RenderConfig(_Section):
+class RenderConfig(Section):
     """Realistic point-cloud construction (paper section 'Realistic Point Cloud Construction')."""
 
     backend: Literal["embree", "numpy"] = Field("embree", description="Ray-casting backend: embree (fast, default) "
@@ -222,7 +227,7 @@ class RenderConfig(_Section):
         return self
 
 
-class LLMConfig(_Section):
+class LLMConfig(Section):
     """An OpenAI-compatible chat-completions endpoint (paper: GPT-4 for relations, GPT-4o for scores)."""
 
     base_url: str | None = Field(None, description="Endpoint base URL, e.g. https://api.openai.com/v1; None = off.")
@@ -256,14 +261,14 @@ class LLMConfig(_Section):
                                                      "ones file by file; None = built-in.")
 
 
-class OutputConfig(_Section):
+class OutputConfig(Section):
     """What the dataset writer produces."""
 
     ply: bool = Field(False, description="Also write points.ply coloured by instance.")
     save_mesh: bool = Field(False, description="Also write the assembled scene.glb.")
 
 
-class GenerateConfig(_Section):
+class GenerateConfig(Section):
     """Everything `assist3d generate` needs."""
 
     preset: str = Field("assist3d", description="Generator preset: assist3d, randomrooms, holodeck-style, no-context, "
@@ -278,13 +283,17 @@ class GenerateConfig(_Section):
     output: OutputConfig = Field(default_factory=OutputConfig)
 
 
-def _suggest(err: ValidationError, model: type[BaseModel]) -> str:
+M = TypeVar("M", bound=BaseModel)
+
+
+def describe_validation_error(err: ValidationError, model: type[BaseModel]) -> list[str]:
+    """One line per problem: the dotted key, what is wrong, the value given, and for an unknown key the
+    closest known key at that level (``"layout.flor_count: unknown key; did you mean 'floor_count'?"``)."""
     lines = []
     for e in err.errors():
-        loc = ".".join(str(p) for p in e["loc"])
+        loc = ".".join(str(p) for p in e["loc"]) or "(top level)"
         msg = e["msg"]
         if e["type"] == "extra_forbidden":
-            # find close matches among the fields at that level
             target: Any = model
             for p in e["loc"][:-1]:
                 f = target.model_fields.get(str(p)) if hasattr(target, "model_fields") else None
@@ -292,23 +301,33 @@ def _suggest(err: ValidationError, model: type[BaseModel]) -> str:
             names = list(getattr(target, "model_fields", {}).keys())
             close = difflib.get_close_matches(str(e["loc"][-1]), names, n=1)
             msg = "unknown key" + (f"; did you mean {close[0]!r}?" if close else f"; known keys: {', '.join(names)}")
-        lines.append(f"  {loc}: {msg}")
-    return "\n".join(lines)
+        else:
+            value = e.get("input")
+            if isinstance(value, (int, float, str, bool)):
+                msg += f" (got {shown(repr(value), 60)})"
+        lines.append(f"{loc}: {msg}")
+    return lines
+
+
+def validate_config(model: type[M], data: dict | None, *, source: str = "<dict>",
+                    what: str = "configuration") -> M:
+    """Validate a plain dict into ``model`` (a :class:`Section`); a :class:`ConfigError` names the source,
+    every wrong key and a fix."""
+    try:
+        return model.model_validate(data or {})
+    except ValidationError as err:
+        detail = "\n".join(f"  {line}" for line in describe_validation_error(err, model))
+        raise ConfigError(f"{source}: invalid {what}\n{detail}") from None
 
 
 def parse_config(data: dict | None, *, source: str = "<dict>") -> GenerateConfig:
     """Validate a plain dict into a :class:`GenerateConfig`; errors name the key and a fix."""
-    try:
-        return GenerateConfig.model_validate(data or {})
-    except ValidationError as err:
-        raise ConfigError(f"{source}: invalid configuration\n{_suggest(err, GenerateConfig)}") from None
+    return validate_config(GenerateConfig, data, source=source)
 
 
 def read_config_file(path: str | Path) -> dict:
     """The mapping in YAML file ``path``, validated on its own so an error names the file (a
     preset or flags may still be merged over it: see :func:`assist3d.presets.compose`)."""
-    import yaml
-
     p = Path(path)
     if not p.is_file():
         raise ConfigError(f"{p}: config file not found")
@@ -348,8 +367,4 @@ def config_to_dict(cfg: BaseModel) -> dict:
 
 
 def dump_config(cfg: BaseModel, path: str | Path) -> None:
-    import yaml
-
-    from .fileio import write_text_atomic
-
     write_text_atomic(path, yaml.safe_dump(config_to_dict(cfg), sort_keys=False))

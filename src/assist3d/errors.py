@@ -1,5 +1,10 @@
 """Exception hierarchy. Messages name the value, the expected form and a fix."""
 
+import errno
+import os
+
+from rich.markup import escape
+
 
 class AssistError(Exception):
     """Base class of every error assist3d raises on purpose."""
@@ -77,8 +82,6 @@ def shown(text: object, limit: int = 200, *, markup: bool = False) -> str:
         used += len(piece)
     result = "".join(out)
     if markup:
-        from rich.markup import escape
-
         result = escape(result)
     return result
 
@@ -91,39 +94,29 @@ class FaultError(AssistError):
     """The operating system refused a read or a write; the message names the path and a way on."""
 
 
-#: errno -> (what happened, what to do). Filled lazily so the module imports nothing at start.
-_FAULTS: dict[int, tuple[str, str]] = {}
-
-
-def _fault_table() -> dict[int, tuple[str, str]]:
-    import errno as e
-
-    if not _FAULTS:
-        _FAULTS.update({
-            e.ENOSPC: ("no space left on the device", "free some space or choose another folder"),
-            e.EDQUOT: ("disk quota exceeded", "free some space or choose another folder"),
-            e.EFBIG: ("file too large for this file system", "choose a folder on another file system"),
-            e.EROFS: ("read-only file system", "choose a writable folder"),
-            e.EACCES: ("permission denied", "check the permissions or choose another folder"),
-            e.EPERM: ("operation not permitted", "check the permissions or choose another folder"),
-            e.EISDIR: ("is a folder, expected a file", "give a file path"),
-            e.ENOTDIR: ("not a folder", "remove the file or choose another path"),
-            e.EEXIST: ("already exists", "remove it or choose another path"),
-            e.ENOENT: ("not found", "check the path"),
-            e.ENAMETOOLONG: ("file name too long", "choose a shorter path"),
-            e.ELOOP: ("too many levels of symbolic links", "check the links on the path"),
-            e.EMFILE: ("too many open files", "raise the limit (ulimit -n) or use fewer workers"),
-            e.ENFILE: ("too many open files in the system", "close other programs or use fewer workers"),
-            e.EIO: ("input/output error", "check the disk or network file system"),
-            e.EBUSY: ("device or resource busy", "wait a moment"),
-        })
-    return _FAULTS
+#: errno -> (what happened, what to do)
+_FAULTS: dict[int, tuple[str, str]] = {
+    errno.ENOSPC: ("no space left on the device", "free some space or choose another folder"),
+    errno.EDQUOT: ("disk quota exceeded", "free some space or choose another folder"),
+    errno.EFBIG: ("file too large for this file system", "choose a folder on another file system"),
+    errno.EROFS: ("read-only file system", "choose a writable folder"),
+    errno.EACCES: ("permission denied", "check the permissions or choose another folder"),
+    errno.EPERM: ("operation not permitted", "check the permissions or choose another folder"),
+    errno.EISDIR: ("is a folder, expected a file", "give a file path"),
+    errno.ENOTDIR: ("not a folder", "remove the file or choose another path"),
+    errno.EEXIST: ("already exists", "remove it or choose another path"),
+    errno.ENOENT: ("not found", "check the path"),
+    errno.ENAMETOOLONG: ("file name too long", "choose a shorter path"),
+    errno.ELOOP: ("too many levels of symbolic links", "check the links on the path"),
+    errno.EMFILE: ("too many open files", "raise the limit (ulimit -n) or use fewer workers"),
+    errno.ENFILE: ("too many open files in the system", "close other programs or use fewer workers"),
+    errno.EIO: ("input/output error", "check the disk or network file system"),
+    errno.EBUSY: ("device or resource busy", "wait a moment"),
+}
 
 
 def _file_on_path(path: str) -> str | None:
     """The first part of ``path`` (itself or a parent) that exists and is not a folder."""
-    import os
-
     p = os.path.abspath(path)
     while True:
         if os.path.lexists(p) and not os.path.isdir(p):
@@ -135,7 +128,7 @@ def _file_on_path(path: str) -> str | None:
 
 
 def _what_and_advice(err: OSError) -> tuple[str, str]:
-    return _fault_table().get(err.errno or -1, (inert(err.strerror or type(err).__name__), "check the path"))
+    return _FAULTS.get(err.errno or -1, (inert(err.strerror or type(err).__name__), "check the path"))
 
 
 def fault_advice(err: OSError) -> str:
@@ -148,12 +141,10 @@ def describe_os_error(err: OSError, *, advice: bool = True) -> str:
 
     ``ENOTDIR`` / ``EEXIST`` name the part of the path that is a file; ``EISDIR`` from a rename
     names the target. Paths are shown inert (see :func:`shown`)."""
-    import errno as e
-
     what, todo = _what_and_advice(err)
     tail = f"; {todo}" if advice else ""
-    path = err.filename2 if err.errno == e.EISDIR and err.filename2 is not None else err.filename
-    if path is not None and err.errno in (e.ENOTDIR, e.EEXIST):
+    path = err.filename2 if err.errno == errno.EISDIR and err.filename2 is not None else err.filename
+    if path is not None and err.errno in (errno.ENOTDIR, errno.EEXIST):
         blocker = _file_on_path(str(path))
         if blocker is not None:
             tail = "; remove the file or choose another path" if advice else ""

@@ -14,6 +14,7 @@ polls the parent pid everywhere (multiprocessing's forkserver, not the parent, f
 
 from __future__ import annotations
 
+import ctypes
 import os
 import signal
 import sys
@@ -129,8 +130,6 @@ def set_parent_death_signal(signum: int = signal.SIGKILL) -> bool:
     if not sys.platform.startswith("linux"):
         return False
     try:
-        import ctypes
-
         libc = ctypes.CDLL(None, use_errno=True)
         return libc.prctl(_PR_SET_PDEATHSIG, int(signum), 0, 0, 0) == 0
     except (OSError, AttributeError):

@@ -7,32 +7,40 @@ everywhere, so it can be regenerated alone and equals the same scene of a full r
 
 from __future__ import annotations
 
+import fcntl
 import json
 import logging
 import multiprocessing as mp
 import os
 import re
+import resource
 import shutil
 import socket
+import statistics
+import tempfile
 import time
 from concurrent.futures import FIRST_COMPLETED, wait
-from dataclasses import dataclass
-from pathlib import Path
 from contextlib import contextmanager
+from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
+from . import raybackend
 from .assets import class_list, open_catalog_for
-from .config import GenerateConfig, config_to_dict, dump_config
 from .bounds import MAX_WORKERS, check_render_memory, check_scene_indices
-from .errors import AssistError, ConfigError, FaultError, describe_os_error, fault_advice, shown
+from .config import GenerateConfig, config_to_dict, dump_config, parse_config
+from .errors import AssistError, ConfigError, DataError, FaultError, describe_os_error, fault_advice, shown
 from .export import Manifest, read_scene_meta, write_scene
 from .export.writer import remove_stale_temps
-from . import raybackend
 from .interrupts import Interrupted, worker_pool
 from .records import STAGES, LLMUsage, SceneRecord, StageTimings, stage_timings
+from .render import make_caster, render_point_cloud, verify_labels
 from .rng import make_rng, scene_seed
+from .scene.assemble import assemble_scene, export_glb
+from .scene.layout import build_layout
+from .scene.planners import make_planner
 
 log = logging.getLogger(__name__)
 
@@ -70,10 +78,6 @@ class Generator:
 
     def scene(self, job: SceneJob) -> dict:
         """Generate and write scene ``job.index``; returns its completion marker."""
-        from .render import make_caster, render_point_cloud, verify_labels
-        from .scene.assemble import assemble_scene, export_glb
-        from .scene.layout import build_layout
-
         cfg = self.cfg
         sid = scene_name(job.index)
         seed = scene_seed(cfg.seed, job.index)
@@ -122,8 +126,6 @@ class Generator:
 
 
 def _with_classes(layout, classes):
-    from dataclasses import replace
-
     return replace(layout, classes=tuple(classes))
 
 
@@ -136,8 +138,6 @@ _WORKER: Generator | None = None
 
 def _init_worker(cfg_json: dict, threads: int) -> None:
     global _WORKER
-    from .config import parse_config
-
     _WORKER = Generator(parse_config(cfg_json), threads=threads)
 
 
@@ -187,8 +187,6 @@ LOCK_NAME = ".generate.lock"
 def _folder_lock(out: Path) -> Iterator[None]:
     """Hold an exclusive lock on ``out`` (released by the OS even on SIGKILL); the lock file is
     removed when the run ends."""
-    import fcntl
-
     path = out / LOCK_NAME
     fd = _lock_file(path)
     try:
@@ -204,10 +202,6 @@ def _folder_lock(out: Path) -> Iterator[None]:
 
 def _lock_file(path: Path) -> int:
     """Open and lock ``path``; retried if a finishing run removed the file we locked."""
-    import fcntl
-
-    from .errors import DataError
-
     while True:
         fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
         try:
@@ -288,8 +282,6 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
     if gen is not None:
         classes, assets_label = gen.classes, gen.assets_label
     else:
-        from .scene.planners import make_planner
-
         cat = open_catalog_for(cfg.assets)
         classes = class_list(cat)
         assets_label = str(getattr(cat, "root", "") or cfg.assets.library or "procedural")
@@ -433,12 +425,6 @@ def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, 
     "peak_memory_mb", ...}``. Opening (or first building) the catalog is timed separately.
     ``cfg`` replaces the paper settings (tests use a tiny one).
     """
-    import resource
-    import statistics
-    import tempfile
-
-    from .config import parse_config
-
     if cfg is None:
         cfg = parse_config({"seed": seed, "assets": {"library": assets}})
     check_render_memory(cfg)

@@ -28,6 +28,34 @@ def test_config_unknown_key_suggests_fix(tmp_path):
         load_config(p)
 
 
+@pytest.mark.parametrize("schema", ["generate", "train", "segmenter"])
+def test_every_config_schema_shares_one_base(schema):
+    """Generation, training and segmenter configs behave alike: a misspelt key names the closest
+    known one, NaN is refused, and an assignment is validated (not only the file)."""
+    from pydantic import ValidationError
+
+    from assist3d.config import Section
+    from assist3d.engine.config import parse_train_config
+    from assist3d.segmenter.config import parse_segmenter_config
+
+    parse, typo, fix, nan = {
+        "generate": (parse_config, {"selection": {"flor_count": 3}}, "floor_count", {"room": {"height_min": float("nan")}}),
+        "train": (parse_train_config, {"optim": {"batch_sise": 2}}, "batch_size", {"optim": {"lr": float("nan")}}),
+        "segmenter": (parse_segmenter_config, {"optim": {"batch_sise": 2}}, "batch_size",
+                      {"optim": {"lr": float("nan")}}),
+    }[schema]
+    with pytest.raises(ConfigError, match=f"did you mean '{fix}'"):
+        parse(typo, source="x.yaml")
+    with pytest.raises(ConfigError, match="x.yaml: invalid .*\\n  .*finite"):
+        parse(nan, source="x.yaml")
+    cfg = parse({})
+    assert isinstance(cfg, Section)
+    section = next(v for v in vars(cfg).values() if isinstance(v, Section))
+    name, value = next((k, v) for k, v in vars(section).items() if isinstance(v, (int, float)) and not isinstance(v, bool))
+    with pytest.raises(ValidationError):
+        setattr(section, name, "not a number")
+
+
 def test_config_bad_yaml_names_file(tmp_path):
     p = tmp_path / "c.yaml"
     p.write_text("selection: [\n")

@@ -189,24 +189,24 @@ def test_a_second_writer_on_the_same_folder_is_refused(full_run):
 
 
 def test_a_failing_scene_is_reported_and_retried_by_the_next_run(full_run, tmp_path, monkeypatch):
-    import assist3d.scene.layout as layout_mod
+    import assist3d.pipeline as pipeline_mod
     from assist3d.errors import PlacementError
 
-    real = layout_mod.build_layout
+    real = pipeline_mod.build_layout
 
     def flaky(catalog, cfg, seed, *, scene_index=0, **kw):
         if scene_index == 1:
             raise PlacementError("room too small for anything (test)")
         return real(catalog, cfg, seed, scene_index=scene_index, **kw)
 
-    monkeypatch.setattr(layout_mod, "build_layout", flaky)
+    monkeypatch.setattr(pipeline_mod, "build_layout", flaky)
     out = tmp_path / "flaky"
     run = generate_dataset(parse_config(TINY), out, range(3))
     assert run.errors == ["scene_000001"]
     assert [m["index"] for m in run.generated] == [0, 2]
     assert [e["id"] for e in json.loads((out / "manifest.json").read_text())["scenes"]] == ["scene_000000",
                                                                                              "scene_000002"]
-    monkeypatch.setattr(layout_mod, "build_layout", real)
+    monkeypatch.setattr(pipeline_mod, "build_layout", real)
     run = generate_dataset(parse_config(TINY), out, range(3))
     assert run.skipped == [0, 2] and [m["index"] for m in run.generated] == [1] and run.errors == []
     assert dataset_bytes(out) == dataset_bytes(full_run[0])

@@ -18,7 +18,7 @@ import json
 import logging
 import threading
 from collections import Counter, OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Iterable, Sequence
 
@@ -196,8 +196,6 @@ class Catalog:
         """
         rel = mesh_file_name(record.id)
         save_mesh(self.root / rel, mesh)
-        from dataclasses import replace
-
         rec = replace(record, mesh_file=rel, triangles=int(len(mesh.faces)))
         with self._lock:
             self._records[rec.id] = rec

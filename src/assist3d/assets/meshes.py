@@ -42,6 +42,7 @@ import numpy as np
 
 from ..contracts import GROUPS, AssetRecord, MeshData, SkippedAsset
 from ..errors import AssetError, shown
+from ..fileio import write_json_atomic
 from .catalog import Catalog
 from .importer import ImportReport, Progress, run_import
 from .naming import assign_groups, class_from_name
@@ -357,6 +358,4 @@ def import_meshes(catalog: Catalog, folder: str | os.PathLike, manifest: str | o
 
 def write_manifest(path: str | os.PathLike, rows: Sequence[dict[str, Any]]) -> None:
     """Write manifest rows as JSON (atomically); a helper for scripts that build manifests."""
-    from ..fileio import write_json_atomic
-
     write_json_atomic(path, {"assets": list(rows)})

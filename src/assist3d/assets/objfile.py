@@ -18,6 +18,7 @@ from __future__ import annotations
 import io
 import logging
 import posixpath
+import warnings
 import zipfile
 from dataclasses import dataclass
 from typing import Callable
@@ -58,7 +59,6 @@ def _numbers(blob: bytes, dtype: type) -> np.ndarray:
     """All numbers of a whitespace-separated blob (C parser); ObjUnsupported if one is not a number."""
     if not blob.strip():
         return np.zeros(0, dtype=dtype)
-    import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # numpy warns (instead of failing) on a bad token

@@ -8,8 +8,11 @@ import os
 import sys
 
 import typer
+from rich.console import Console
+from rich.logging import RichHandler
 
 from ..errors import AssistError, FaultError, describe_os_error, inert
+from ..interrupts import Interrupted, exit_on_signals
 
 app = typer.Typer(
     name="assist3d",
@@ -31,9 +34,6 @@ def _root(
 
 def setup_logging(level: int = logging.INFO) -> None:
     """Attach one rich handler to the package logger (the library itself never configures logging)."""
-    from rich.console import Console
-    from rich.logging import RichHandler
-
     logger = logging.getLogger("assist3d")
     logger.setLevel(level)
     for h in list(logger.handlers):
@@ -86,8 +86,6 @@ def _command_name(argv: list[str]) -> str | None:
 
 
 def main() -> None:
-    from ..interrupts import Interrupted, exit_on_signals
-
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     try:
         with exit_on_signals():

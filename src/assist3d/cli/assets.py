@@ -10,14 +10,19 @@ import inspect
 import json
 import os
 import sys
+import time
 from collections import Counter
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator, List, Optional
 
 import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
 
 from ..bounds import MAX_SEED, MAX_WORKERS
+from ..contracts import GROUPS
 from ..errors import AssetError, ConfigError, shown
 from ..paths import ENV_ASSETS, resolve_library
 
@@ -31,8 +36,6 @@ assets_app.add_typer(import_app, name="import")
 
 
 def _stderr_console():
-    from rich.console import Console
-
     return Console(stderr=True)
 
 
@@ -42,7 +45,6 @@ def _progress_bar(label: str, enabled: bool = True) -> Iterator:
     if not enabled:
         yield None
         return
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     # auto_refresh=False: no refresh thread, so the importers' forked workers never inherit a
     # console lock held by it; the bar is redrawn on each update instead
@@ -63,8 +65,6 @@ def _print_summary(title: str, report_json: dict, catalog, as_json: bool) -> Non
     if as_json:
         sys.stdout.write(json.dumps({"import": report_json, "catalog": str(catalog.root), "stats": stats}) + "\n")
         return
-    from rich.console import Console
-    from rich.table import Table
 
     console = Console()
     table = Table(title=title)
@@ -158,7 +158,6 @@ def procedural_cmd(
         from ..assets.procedural import build_library
     except ImportError as e:
         raise AssetError(f"the procedural library is not available in this installation ({e})") from None
-    import time
 
     root = resolve_library(library)
     kwargs = {}
@@ -171,7 +170,6 @@ def procedural_cmd(
     if as_json:
         sys.stdout.write(json.dumps({"catalog": str(root), "seconds": round(seconds, 2), "stats": stats}) + "\n")
         return
-    from rich.console import Console
 
     Console().print(f"procedural library: {count} assets (seed {seed}) in {shown(root, 400, markup=True)}, "
                     f"{seconds:.1f} s; catalog now "
@@ -196,8 +194,6 @@ def stats_cmd(
     if as_json:
         sys.stdout.write(json.dumps(stats) + "\n")
         return
-    from rich.console import Console
-    from rich.table import Table
 
     console = Console()
     t = Table(title=f"catalog {shown(root, 400, markup=True)}")
@@ -234,7 +230,6 @@ def list_cmd(
 ) -> None:
     """List assets (id, class, groups, size in metres, supports)."""
     from ..assets.catalog import Catalog
-    from ..contracts import GROUPS
 
     if group is not None and group not in GROUPS:
         raise ConfigError(f"--group {group!r}: expected one of {', '.join(GROUPS)}")
@@ -249,8 +244,6 @@ def list_cmd(
     if as_json:
         sys.stdout.write(json.dumps([r.to_json() for r in recs]) + "\n")
         return
-    from rich.console import Console
-    from rich.table import Table
 
     t = Table(title=f"{len(recs)} assets")
     for col in ("id", "class", "groups", "size w x d x h (m)", "supports", "tris"):

@@ -9,6 +9,9 @@ from pathlib import Path
 from typing import Optional
 
 import typer
+from rich.console import Console
+from rich.progress import Progress
+from rich.table import Table
 
 from ..bounds import MAX_WORKERS
 from ..errors import ConfigError, DataError, shown
@@ -52,10 +55,6 @@ def evaluate(
                                 help=f"Read and match scenes in this many processes (at most {MAX_WORKERS})."),
 ) -> None:
     """Score instance predictions class-agnostically, exactly like the ScanNet benchmark script."""
-    from rich.console import Console
-    from rich.progress import Progress
-    from rich.table import Table
-
     from ..data import open_dataset
     from ..evaluation import METRIC_KEYS, default_feature, evaluate_dataset
 

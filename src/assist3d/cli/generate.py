@@ -10,9 +10,13 @@ from pathlib import Path
 from typing import List, Optional
 
 import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.table import Table
 
 from ..bounds import MAX_SCENE_INDEX, MAX_SCENES, MAX_SEED, MAX_WORKERS, check_scene_indices
 from ..errors import ConfigError
+from ..presets import compose
 from ..records import STAGES, stage_timings
 
 log = logging.getLogger("assist3d.cli.generate")
@@ -29,8 +33,6 @@ def _stage_means(metas: list[dict]) -> dict[str, float]:
 
 
 def _summary_table(run, console) -> None:
-    from rich.table import Table
-
     entries = [e for e in run.manifest.entries if e.get("index") in set(run.requested)]
     t = Table(title=f"dataset {run.out}")
     t.add_column("")
@@ -92,12 +94,7 @@ def register(app: typer.Typer) -> None:
                                                   "Ray)."),
     ) -> None:
         """Generate a dataset: one Pointcept-layout folder per scene plus manifest.json."""
-        from rich.console import Console
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, \
-            TimeRemainingColumn
-
         from ..pipeline import generate_dataset
-        from ..presets import compose
 
         if backend not in ("local", "ray"):
             raise ConfigError(f"--backend must be local or ray, got {backend!r}")
@@ -193,8 +190,6 @@ def register(app: typer.Typer) -> None:
         if as_json:
             sys.stdout.write(json.dumps(res) + "\n")
             return
-        from rich.console import Console
-        from rich.table import Table
 
         t = Table(title=f"assist3d bench: {res['scenes']} scenes at paper settings, 1 worker")
         t.add_column("stage")

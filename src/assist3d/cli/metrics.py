@@ -7,9 +7,13 @@ from pathlib import Path
 from typing import List, Optional
 
 import typer
+from rich.console import Console
+from rich.table import Table
 
 from ..bounds import MAX_SCENES, MAX_SEED
+from ..config import LLMConfig
 from ..errors import shown
+from ..paths import resolve_library
 
 MAX_CLUSTERS = 1000
 
@@ -41,10 +45,6 @@ def metrics(
                                           "ScanNet scans)."),
 ) -> None:
     """Geometry diversity, context complexity and layout reasonability of one or more datasets."""
-    from rich.console import Console
-    from rich.table import Table
-
-    from ..config import LLMConfig
     from ..metrics.diversity import Codebook
     from ..metrics.realism import load_reference
     from ..metrics.report import metrics_table, plot_summaries, shared_codebook, summarize_dataset
@@ -87,7 +87,6 @@ def cluster_assets_cmd(
     """Compute per-asset shape features (cached) and k-means shape clusters for the geometry ablation."""
     from ..assets.catalog import Catalog
     from ..metrics.clusters import cluster_assets
-    from ..paths import resolve_library
 
     cat = Catalog.open(resolve_library(library))
     sizes = cluster_assets(cat, k=k, seed=seed)

@@ -6,10 +6,14 @@ import json
 from pathlib import Path
 from typing import Optional
 
+import numpy as np
 import typer
 
 from ..bounds import MAX_SCENE_INDEX, MAX_SEED
+from ..contracts import SceneLayout
 from ..errors import DataError, shown
+from ..fileio import write_json_atomic
+from ..presets import compose
 
 
 def register(app: typer.Typer) -> None:
@@ -39,8 +43,6 @@ def layout_cmd(
 ) -> None:
     """Build one scene's layout (no rendering): layout.json and scene.glb."""
     from ..assets import open_catalog_for
-    from ..fileio import write_json_atomic
-    from ..presets import compose
     from ..scene.layout import build_layout, layout_summary
 
     overrides: dict = {}
@@ -74,8 +76,6 @@ def layout_cmd(
 
 def _check_finite(layout, path: Path) -> None:
     """Refuse a layout whose room or poses hold NaN or infinite numbers (a damaged or edited file)."""
-    import numpy as np
-
     room = np.asarray(layout.room.polygon, dtype=float)
     if not (np.isfinite(room).all() and np.isfinite(layout.room.height)):
         raise DataError(f"{path}: the room polygon or height is not finite (NaN or infinite)")
@@ -92,7 +92,6 @@ def layout_png_cmd(
 ) -> None:
     """Render a top-down picture of an existing layout."""
     from ..assets import open_catalog
-    from ..contracts import SceneLayout
     from ..scene.topdown import render_topdown
 
     try:

@@ -4,6 +4,7 @@ any scan with the shipped model, a trained checkpoint or the geometric reference
 from __future__ import annotations
 
 import importlib.util
+import io
 import json
 import logging
 import time
@@ -12,8 +13,13 @@ from typing import Optional
 
 import numpy as np
 import typer
+import yaml
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
 
 from ..errors import ConfigError, DataError, shown
+from ..fileio import write_bytes_atomic
 from ..paths import safe_name
 
 log = logging.getLogger("assist3d.segment")
@@ -53,10 +59,6 @@ def probe_cmd(
     """Train the CPU segmenter on TRAIN for a fixed budget, segment EVAL zero-shot, print AP/AP50/AP25/AR."""
     _require_torch()
     import torch
-    import yaml
-    from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-    from rich.table import Table
 
     from ..segmenter.config import parse_segmenter_config
     from ..segmenter.probe import ProbeRequest, run_probe
@@ -204,9 +206,6 @@ def _png(path: Path, coord: np.ndarray, colors: np.ndarray, title: str) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from ..fileio import write_bytes_atomic
-    import io
 
     order = np.argsort(coord[:, 2])
     fig, ax = plt.subplots(figsize=(7, 7), dpi=110)

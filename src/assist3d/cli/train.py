@@ -8,6 +8,9 @@ import os
 from pathlib import Path
 
 import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.table import Table
 
 from ..bounds import MAX_THREADS
 from ..errors import ConfigError
@@ -36,7 +39,6 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Train the model; writes OUT/last.pt, OUT/epoch_NNNN.pt, OUT/metrics.csv and OUT/config.yaml."""
         _require_torch()
-        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
         from ..engine.config import load_train_config, parse_data_arg
         from ..engine.train import train
@@ -101,8 +103,6 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Forward and forward+backward time and peak memory of the model on one scene."""
         _require_torch()
-        from rich.console import Console
-        from rich.table import Table
 
         from ..engine.bench import run_model_bench
         from ..engine.config import TrainConfig, load_train_config

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DataError, shown
+from ..fileio import write_bytes_atomic
 from .base import checked_coords, clean_colors, clean_normals
 
 log = logging.getLogger(__name__)
@@ -286,8 +287,6 @@ def vertex_normals(coord: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 def write_ply(path: str | Path, coord: np.ndarray, color: np.ndarray | None = None, faces: np.ndarray | None = None) -> None:
     """Write a binary little-endian PLY (ScanNet's property names: x y z, red green blue alpha)."""
-    from ..fileio import write_bytes_atomic
-
     n = len(coord)
     fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")]
     if color is not None:

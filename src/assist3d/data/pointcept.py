@@ -32,6 +32,7 @@ import numpy as np
 
 from ..contracts import PointSample
 from ..errors import DataError
+from ..export.writer import META_NAME
 from .base import (MAX_CLASS_INDEX, MAX_INSTANCE_ID, SceneDataset, checked_coords, clean_colors, clean_normals,
                    integer_labels, read_npy)
 
@@ -82,7 +83,7 @@ class PointceptDataset(SceneDataset):
         dirs = _scene_dirs(root)
         if fmt == "assist3d":
             # The generator writes meta.json last: a folder without it is unfinished.
-            done = {k: d for k, d in dirs.items() if (d / "meta.json").is_file()}
+            done = {k: d for k, d in dirs.items() if (d / META_NAME).is_file()}
             if len(done) < len(dirs):
                 log.warning("%s: skipping %d unfinished scene folders (no meta.json)", root, len(dirs) - len(done))
             dirs = done

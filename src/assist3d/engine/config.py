@@ -11,16 +11,13 @@ from pathlib import Path
 from typing import Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import Field
 
-from ..errors import ConfigError, shown
-
-
-class _Section(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+from ..config import Section, validate_config
+from ..errors import ConfigError
 
 
-class ModelConfig(_Section):
+class ModelConfig(Section):
     """Sizes of the backbone and decoder (defaults: Mask3D with Res16UNet34C)."""
 
     stem_channels: int = Field(32, description="stem conv output channels (paper 32)")
@@ -44,7 +41,7 @@ class ModelConfig(_Section):
     backend: Literal["torch", "spconv"] = Field("torch", description="sparse conv backend")
 
 
-class DataSpec(_Section):
+class DataSpec(Section):
     """One training set: a reader spec ``FORMAT:PATH`` tagged real or synthetic."""
 
     spec: str
@@ -56,7 +53,7 @@ class DataSpec(_Section):
         return "synthetic" if self.spec.split(":", 1)[0] == "assist3d" else "real"
 
 
-class DataConfig(_Section):
+class DataConfig(Section):
     train: list[DataSpec] = Field(default_factory=list, description="training sets")
     voxel_size: float = Field(0.02, ge=0.005, le=1, description="voxel edge in metres, 0.005..1 (paper 0.02)")
     synthetic_alpha: float = Field(0.5, description="weight of the synthetic loss (paper 0.5)")
@@ -65,7 +62,7 @@ class DataConfig(_Section):
     cache_scenes: bool = Field(False, description="keep every loaded scene in memory (small datasets)")
 
 
-class AugmentConfig(_Section):
+class AugmentConfig(Section):
     enabled: bool = Field(True, description="apply training augmentations")
     offset_m: float = Field(0.5, description="random translation after centring, metres")
     mirror: bool = Field(True, description="mirror x and y with p 0.5 each (Mask3D)")
@@ -79,7 +76,7 @@ class AugmentConfig(_Section):
     rgb_shift: float = Field(20.0, description="per-channel RGB shift +- (Mask3D 20)")
 
 
-class LossConfig(_Section):
+class LossConfig(Section):
     objectness_weight: float = Field(2.0, description="objectness loss and matching weight (paper 2)")
     mask_weight: float = Field(5.0, description="mask BCE weight (paper 5)")
     dice_weight: float = Field(2.0, description="dice weight (paper 2)")
@@ -89,7 +86,7 @@ class LossConfig(_Section):
                                                                  "(0 = all; at most 100,000,000)")
 
 
-class OptimConfig(_Section):
+class OptimConfig(Section):
     lr: float = Field(1e-4, description="AdamW peak learning rate (paper 1e-4)")
     weight_decay: float = Field(0.01, description="AdamW weight decay")
     epochs: int = Field(600, ge=1, le=100_000, description="epochs, at most 100,000 (paper 600)")
@@ -99,7 +96,7 @@ class OptimConfig(_Section):
     amp: bool = Field(True, description="mixed precision on CUDA (ignored on CPU)")
 
 
-class PredictConfig(_Section):
+class PredictConfig(Section):
     top_k: int = Field(100, ge=1, le=10_000, description="masks kept per scene (at most 10,000)")
     dbscan: bool = Field(False, description="split masks into DBSCAN clusters")
     dbscan_eps: float = Field(0.95, description="DBSCAN radius in metres (Mask3D ScanNet 0.95)")
@@ -107,7 +104,7 @@ class PredictConfig(_Section):
     min_points: int = Field(1, description="drop masks with fewer points")
 
 
-class TrainConfig(_Section):
+class TrainConfig(Section):
     seed: int = Field(0, ge=0, le=2**32 - 1, description="global seed, 0..2^32-1")
     device: str = Field("auto", description="auto, cpu or cuda")
     checkpoint_every: int = Field(10, ge=1, le=100_000, description="epochs between numbered checkpoints (last.pt "
@@ -122,21 +119,7 @@ class TrainConfig(_Section):
 
 
 def parse_train_config(data: dict, source: str = "<dict>") -> TrainConfig:
-    try:
-        return TrainConfig.model_validate(data or {})
-    except ValidationError as e:
-        raise ConfigError(f"{source}: invalid training config: {_brief(e)}") from None
-
-
-def _brief(err: ValidationError) -> str:
-    """``"optim.batch_size: Input should be less than or equal to 1024 (got 1000000000); ..."``."""
-    parts = []
-    for e in err.errors():
-        loc = ".".join(str(p) for p in e["loc"]) or "(top level)"
-        value = e.get("input")
-        got = f" (got {shown(repr(value), 60)})" if isinstance(value, (int, float, str, bool)) else ""
-        parts.append(f"{loc}: {e['msg']}{got}")
-    return "; ".join(parts)
+    return validate_config(TrainConfig, data, source=source, what="training config")
 
 
 def load_train_config(path: str | Path) -> TrainConfig:

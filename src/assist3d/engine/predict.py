@@ -24,6 +24,7 @@ from ..errors import shown
 from ..fileio import write_npz_atomic
 from ..paths import safe_name
 from .config import PredictConfig, TrainConfig
+from .scenes import open_spec
 from .train import build_model, config_from_checkpoint, load_checkpoint, resolve_device
 from .voxelize import collate, voxelize
 
@@ -125,8 +126,6 @@ def predict_dataset(checkpoint: str | Path, spec: str, out_dir: str | Path, *, d
 
     ``overrides``: :class:`PredictConfig` fields replacing the checkpoint config's (e.g. ``{"top_k": 50}``).
     """
-    from .scenes import open_spec
-
     model, cfg, dev = load_model(checkpoint, device)
     pcfg = PredictConfig.model_validate({**cfg.predict.model_dump(), **(overrides or {})})
     ds = open_spec(spec)

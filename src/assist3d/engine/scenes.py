@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..contracts import PointSample
+from ..data import open_dataset
 from ..errors import ConfigError
 from .augment import augment_points
 from .config import AugmentConfig, DataSpec
@@ -18,10 +19,6 @@ log = logging.getLogger(__name__)
 
 def open_spec(spec: str):
     """Open ``FORMAT:PATH`` through the readers of :mod:`assist3d.data`."""
-    try:
-        from ..data import open_dataset
-    except ImportError as e:
-        raise ConfigError(f"{spec}: the dataset readers (assist3d.data.open_dataset) are not available: {e}") from None
     return open_dataset(spec)
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..contracts import PointSample
+from ..export.writer import META_NAME
 from ..fileio import write_npy_atomic, write_text_atomic
 
 
@@ -82,7 +83,7 @@ def write_pointcept_scene(folder: Path, sample: PointSample) -> None:
     write_npy_atomic(folder / "instance.npy", sample.instance)
     meta = {"scene_id": sample.scene_id, "points": len(sample), "instances": int(sample.instance.max()) + 1,
             "source": "assist3d.engine.toy"}
-    write_text_atomic(folder / "meta.json", json.dumps(meta, indent=1) + "\n")
+    write_text_atomic(folder / META_NAME, json.dumps(meta, indent=1) + "\n")
 
 
 def write_toy_dataset(out: str | Path, num_scenes: int, *, seed: int, num_objects: int = 6, room_m: float = 5.0,

@@ -21,6 +21,7 @@ import numpy as np
 
 from ..contracts import PointSample
 from ..errors import DataError
+from ..metrics.features import shape_descriptor
 from .ap import MIN_REGION_SIZE
 
 log = logging.getLogger(__name__)
@@ -31,8 +32,6 @@ FEATURE_SEED = 0
 
 def default_feature(points: np.ndarray) -> np.ndarray | None:
     """The metrics module's shape descriptor with a fixed seed (same points -> same feature)."""
-    from ..metrics.features import shape_descriptor
-
     return shape_descriptor(points, rng=np.random.default_rng(FEATURE_SEED))
 
 

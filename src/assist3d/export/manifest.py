@@ -9,23 +9,38 @@ import logging
 from importlib import metadata
 from pathlib import Path
 
+from .. import __version__
+from ..config import GenerateConfig, config_to_dict
 from ..errors import DataError
 from ..fileio import write_json_atomic
 from ..records import manifest_entry
 
 log = logging.getLogger(__name__)
 
-__all__ = ["MANIFEST_NAME", "versions", "scene_entry", "llm_summary", "Manifest", "IGNORED_CONFIG_KEYS"]
+__all__ = ["MANIFEST_NAME", "versions", "scene_entry", "llm_summary", "Manifest", "IGNORED_CONFIG_KEYS", "read_manifest"]
 
 MANIFEST_NAME = "manifest.json"
 # settings that change speed or extra files, never the arrays: a resume may change them
 IGNORED_CONFIG_KEYS = (("render", "threads"), ("output", "ply"), ("output", "save_mesh"))
 
 
+def read_manifest(root: str | Path, *, fix: str = "") -> dict | None:
+    """The ``manifest.json`` of dataset folder ``root`` as a dict, None if the folder has none; a
+    :class:`DataError` naming the file (and ``fix``, what to do) if it is unreadable or not an object."""
+    path = Path(root) / MANIFEST_NAME
+    if not path.is_file():
+        return None
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as e:
+        raise DataError(f"{path}: unreadable manifest ({e}){fix}") from None
+    if not isinstance(data, dict):
+        raise DataError(f"{path}: unreadable manifest (expected a JSON object, got {type(data).__name__}){fix}")
+    return data
+
+
 def versions() -> dict[str, str]:
     """Versions of the packages that determine the output."""
-    from .. import __version__
-
     out = {"assist3d": __version__}
     for pkg in ("numpy", "trimesh", "embreex", "scipy", "shapely", "fpsample"):
         try:
@@ -62,8 +77,6 @@ def llm_summary(scenes: list[dict]) -> dict:
 def _comparable(cfg: dict) -> dict:
     """``cfg`` without the ignored keys and with every option it lacks at today's default: a dataset
     written before an option existed was made as if it had its default value, so it stays resumable."""
-    from ..config import GenerateConfig, config_to_dict
-
     out = json.loads(json.dumps(cfg))
     for section, defaults in config_to_dict(GenerateConfig()).items():
         if isinstance(defaults, dict) and isinstance(out.get(section), dict):
@@ -87,12 +100,9 @@ class Manifest:
     def check_compatible(self) -> None:
         """Raise DataError if the folder already holds a dataset made with another config, seed
         or class list (mixing them would silently corrupt it)."""
-        if not self.path.is_file():
+        old = read_manifest(self.root, fix="; remove it or choose another --out")
+        if old is None:
             return
-        try:
-            old = json.loads(self.path.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as e:
-            raise DataError(f"{self.path}: unreadable manifest ({e}); remove it or choose another --out") from None
         diffs = []
         if old.get("seed") != self.data["seed"]:
             diffs.append(f"seed {old.get('seed')} != {self.data['seed']}")

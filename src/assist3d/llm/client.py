@@ -37,6 +37,11 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Iterator
 
+try:
+    import fcntl
+except ImportError:  # not POSIX (Windows): request slots are counted per process
+    fcntl = None  # type: ignore[assignment]
+
 from ..config import LLMConfig
 from ..errors import ConfigError, LLMError, shown
 from ..rng import stable_hash
@@ -341,9 +346,7 @@ class ChatClient:
     @contextmanager
     def _slot(self) -> Iterator[None]:
         """Hold one of ``concurrency`` request slots shared by every process using this cache."""
-        try:
-            import fcntl
-        except ImportError:  # not POSIX: the limit holds per process only
+        if fcntl is None:  # not POSIX: the limit holds per process only
             with _process_semaphore(self.cfg.concurrency):
                 yield
             return

@@ -4,6 +4,7 @@ paper's geometry-diversity ablation (5 clusters; generate from the first k with 
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 
 import numpy as np
 from scipy.cluster.vq import kmeans2
@@ -55,8 +56,6 @@ def asset_features(catalog: Catalog, *, seed: int = 0) -> tuple[list[str], np.nd
 def cluster_assets(catalog: Catalog, *, k: int = 5, seed: int = 0) -> dict[int, int]:
     """Assign every asset a shape cluster 0..k-1 (k-means on standardised features) and save the
     catalog. Clusters are numbered by decreasing size. Returns {cluster: asset count}."""
-    from dataclasses import replace
-
     ids, feats = asset_features(catalog, seed=seed)
     if len(ids) < k:
         raise AssetError(f"{catalog.root}: {len(ids)} assets with features, fewer than k = {k} clusters")

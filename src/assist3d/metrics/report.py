@@ -11,9 +11,14 @@ from typing import Sequence
 
 import numpy as np
 
+from ..assets import open_catalog
 from ..assets.catalog import Catalog
 from ..contracts import SceneLayout
+from ..data import open_dataset
 from ..errors import AssistError, DataError
+from ..export.manifest import read_manifest
+from ..fileio import atomic_path
+from ..llm.vlm import vlm_layout_score
 from ..rng import make_rng
 from .context import context_complexity, per_class_max_cooccurrence
 from .diversity import Codebook, fit_codebook, geometry_diversity
@@ -53,17 +58,11 @@ def normalise_spec(spec: str) -> str:
 
 def _dataset_catalog(root: Path, assets: str | None) -> Catalog | None:
     """The catalog a generated dataset was made from: --assets, else the one its manifest names."""
-    from ..assets import open_catalog
-
     if assets:
         return Catalog.open(assets)
-    manifest = root / "manifest.json"
-    if not manifest.is_file():
+    m = read_manifest(root)
+    if m is None:
         return None
-    try:
-        m = json.loads(manifest.read_text())
-    except (OSError, json.JSONDecodeError) as e:
-        raise DataError(f"{manifest}: unreadable manifest ({e})") from None
     path = m.get("catalog") or m.get("assets")  # `assist3d generate` writes the catalog folder as "assets"
     if isinstance(path, dict):
         path = path.get("path")
@@ -83,8 +82,6 @@ def _dataset_catalog(root: Path, assets: str | None) -> Catalog | None:
 def summarize_dataset(spec: str, *, assets: str | None = None, max_scenes: int | None = None,
                       seed: int = 0, vlm_cfg=None) -> DatasetSummary:
     """Read a dataset once: instance descriptors, per-scene class sets, layout scores."""
-    from ..data import open_dataset
-
     given, spec = spec, normalise_spec(spec)
     ds = open_dataset(spec)
     summary = DatasetSummary(name=given, spec=spec)
@@ -118,8 +115,6 @@ def summarize_dataset(spec: str, *, assets: str | None = None, max_scenes: int |
                     catalog = None
                     summary.layout_scores = []
             if vlm_cfg is not None:
-                from ..llm.vlm import vlm_layout_score
-
                 s = vlm_layout_score(Path(ds.root) / sid, vlm_cfg)
                 if s is not None:
                     summary.vlm_scores.append(s)
@@ -227,8 +222,6 @@ def plot_summaries(summaries: Sequence[DatasetSummary], codebook: Codebook, path
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from ..fileio import atomic_path
 
     fig, axes = plt.subplots(1, 3, figsize=(16, 4.6))
     k = len(codebook.centers)

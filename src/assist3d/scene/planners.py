@@ -39,6 +39,6 @@ def make_planner(cfg: GenerateConfig) -> Planner:
         if cfg.layout.planner == "rules":
             _say_rules_once()
         return rules
-    from ..llm.planner import LLMPlanner  # optional dependency (httpx): imported only when asked for
+    from ..llm.planner import LLMPlanner  # loaded only when an LLM endpoint is configured (docs/architecture.md)
 
     return LLMPlanner(cfg.llm, fallback=rules)

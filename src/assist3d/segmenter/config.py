@@ -9,16 +9,15 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field, ValidationError
+from pydantic import Field
 
-from ..engine.config import _Section
-from ..errors import ConfigError
+from ..config import Section, validate_config
 
 Channels = Annotated[int, Field(ge=4, le=1024)]
 Blocks = Annotated[int, Field(ge=1, le=8)]
 
 
-class NetConfig(_Section):
+class NetConfig(Section):
     """Backbone and heads."""
 
     voxel_size: float = Field(0.05, gt=0.005, le=0.5, description="voxel edge in metres")
@@ -31,7 +30,7 @@ class NetConfig(_Section):
     norm: Literal["scene", "batch"] = Field("scene", description="scene: per-scene statistics; batch: BatchNorm")
 
 
-class AugmentConfig(_Section):
+class AugmentConfig(Section):
     """Training augmentations (applied to every training scene, generated or real, alike)."""
 
     crop_m: float = Field(6.0, ge=0.0, le=100.0, description="random square crop edge in metres (0 = whole scene)")
@@ -48,7 +47,7 @@ class AugmentConfig(_Section):
     color_drop: float = Field(0.2, ge=0.0, le=1.0, description="probability of greying the colour (colour input only)")
 
 
-class ClusterConfig(_Section):
+class ClusterConfig(Section):
     """Instances from per-voxel predictions."""
 
     fg_threshold: float = Field(0.5, gt=0.0, lt=1.0, description="foreground probability threshold")
@@ -56,7 +55,7 @@ class ClusterConfig(_Section):
     min_voxels: int = Field(6, ge=1, le=100_000, description="drop clusters with fewer voxels")
 
 
-class OptimConfig(_Section):
+class OptimConfig(Section):
     lr: float = Field(2e-3, gt=0.0, le=1.0, description="Adam peak learning rate (cosine decay to 1 %)")
     weight_decay: float = Field(1e-4, ge=0.0, le=1.0)
     batch_size: int = Field(2, ge=1, le=64, description="scenes per step")
@@ -64,7 +63,7 @@ class OptimConfig(_Section):
     direction_weight: float = Field(0.5, ge=0.0)
 
 
-class SegmenterConfig(_Section):
+class SegmenterConfig(Section):
     net: NetConfig = Field(default_factory=NetConfig)
     augment: AugmentConfig = Field(default_factory=AugmentConfig)
     cluster: ClusterConfig = Field(default_factory=ClusterConfig)
@@ -72,7 +71,4 @@ class SegmenterConfig(_Section):
 
 
 def parse_segmenter_config(data: dict | None, source: str = "<dict>") -> SegmenterConfig:
-    try:
-        return SegmenterConfig.model_validate(data or {})
-    except ValidationError as e:
-        raise ConfigError(f"{source}: invalid segmenter config:\n{e}") from None
+    return validate_config(SegmenterConfig, data, source=source, what="segmenter config")

@@ -34,6 +34,7 @@ from ..fileio import write_json_atomic
 from .checkpoint import load_segmenter, save_segmenter
 from .config import SegmenterConfig
 from .data import Scene
+from .geometric import segment_geometric
 from .infer import segment_points
 from .train import Budget, train_segmenter
 
@@ -113,8 +114,6 @@ def evaluate_model(model_path: Path, eval_specs: Sequence[str], pred_dir: Path, 
             if loaded is not None:
                 seg = segment_points(loaded.model, loaded.config, sample.coord, sample.color)
             else:
-                from .geometric import segment_geometric
-
                 seg = segment_geometric(sample.coord)
             seconds += time.perf_counter() - t0
             save_predictions(pred_dir / f"{sid}.npz", seg.masks, seg.scores)

@@ -19,6 +19,7 @@ Public API::
 
 from __future__ import annotations
 
+import difflib
 import logging
 import time
 from collections import deque
@@ -92,8 +93,6 @@ def build_family(name: str, *, rng: np.random.Generator) -> Shape:
     try:
         fam = FAMILIES[name]
     except KeyError:
-        import difflib
-
         best = difflib.get_close_matches(name, list(FAMILIES), n=1)
         hint = f"; did you mean {best[0]!r}?" if best else ""
         raise AssetError(f"unknown procedural family {name!r}{hint}") from None

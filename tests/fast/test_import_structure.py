@@ -1,0 +1,155 @@
+"""The package's import structure (docs/architecture.md, "Imports"): no import cycle between modules,
+and an import inside a function only where the rule allows one: an optional extra, a documented
+heavy module, or (in ``assist3d.cli`` only) the stage module a command runs."""
+
+from __future__ import annotations
+
+import ast
+import sys
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[2] / "src"
+PKG = SRC / "assist3d"
+
+#: optional extras: importing them at module level would break a core install
+EXTRAS = {"torch", "ray", "spconv", "httpx", "skimage"}
+#: heavy third-party modules (0.3-2.5 s to import on the 2-core VM), loaded by the functions that use them
+HEAVY = {"trimesh", "shapely", "scipy.sparse", "scipy.spatial", "PIL", "embreex", "matplotlib",
+         "mapbox_earcut"}
+#: package modules that are loaded on first use: the procedural library builders (they pull in
+#: trimesh and shapely; only needed when the library is first built) and the LLM planner (only when
+#: an endpoint is configured)
+LAZY_INTERNAL = {"assist3d.assets.procedural", "assist3d.llm.planner"}
+#: light modules every command needs: a CLI command imports them at module level like anyone else
+CORE = {"assist3d.errors", "assist3d.fileio", "assist3d.contracts", "assist3d.paths", "assist3d.bounds",
+        "assist3d.rng", "assist3d.records", "assist3d.interrupts", "assist3d.config", "assist3d.presets"}
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for p in PKG.rglob("*.py"):
+        parts = list(p.relative_to(SRC).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        out[".".join(parts)] = p
+    return out
+
+
+MODULES = _modules()
+
+
+def _targets(module: str, path: Path, node: ast.Import | ast.ImportFrom) -> list[str]:
+    """The modules an import statement loads (``from pkg import sub`` names ``pkg.sub``)."""
+    if isinstance(node, ast.Import):
+        return [a.name for a in node.names]
+    base = node.module or ""
+    if node.level:
+        pkg = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
+        for _ in range(node.level - 1):
+            pkg = pkg.rsplit(".", 1)[0]
+        base = f"{pkg}.{base}" if base else pkg
+    return [f"{base}.{a.name}" if f"{base}.{a.name}" in MODULES else base for a in node.names]
+
+
+def _imports() -> tuple[dict[str, set[str]], list[tuple[str, str, int]]]:
+    """Module-level edges inside the package, and every (module, target, line) imported in a function."""
+    graph: dict[str, set[str]] = {m: set() for m in MODULES}
+    local: list[tuple[str, str, int]] = []
+    for mod, path in MODULES.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        in_func: set[int] = set()
+        for fn in ast.walk(tree):
+            if isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                for node in ast.walk(fn):
+                    if isinstance(node, (ast.Import, ast.ImportFrom)) and id(node) not in in_func:
+                        in_func.add(id(node))
+                        local += [(mod, t, node.lineno) for t in _targets(mod, path, node)]
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Import, ast.ImportFrom)) and id(node) not in in_func:
+                graph[mod] |= {t for t in _targets(mod, path, node) if t in MODULES and t != mod}
+    return graph, local
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    limit = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(limit, 10 * len(graph)))
+    try:
+        for v in graph:
+            if v not in index:
+                visit(v)
+    finally:
+        sys.setrecursionlimit(limit)
+    return out
+
+
+def _allowed(module: str, target: str) -> bool:
+    def under(names: set[str]) -> bool:
+        return any(target == n or target.startswith(n + ".") for n in names)
+
+    if under(EXTRAS) or under(HEAVY) or under(LAZY_INTERNAL):
+        return True
+    if module == "assist3d.cli" or module.startswith("assist3d.cli."):
+        # a command imports the stage it runs when it runs, so `assist3d --help` loads none of them
+        return target.startswith("assist3d.") and not under(CORE)
+    return False
+
+
+def test_no_import_cycle():
+    graph, _ = _imports()
+    assert _cycles(graph) == []
+
+
+def test_imports_inside_functions_follow_the_rule():
+    _, local = _imports()
+    bad = [f"{m}:{line} imports {t}" for m, t, line in local if not _allowed(m, t)]
+    assert bad == [], "move these imports to the top of the module (or document why they are lazy):\n" + "\n".join(bad)
+
+
+def test_cycle_finder_finds_a_cycle():
+    """The checker itself: a two-module loop and a three-module loop are reported, a chain is not."""
+    graph = {"a": {"b"}, "b": {"a"}, "c": {"d"}, "d": {"e"}, "e": {"c"}, "f": {"a"}}
+    assert sorted(_cycles(graph)) == [["a", "b"], ["c", "d", "e"]]
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": set()}) == []
+
+
+@pytest.mark.parametrize("module,target,ok", [
+    ("assist3d.pipeline", "torch", True),
+    ("assist3d.pipeline", "assist3d.render", False),
+    ("assist3d.pipeline", "json", False),
+    ("assist3d.cli.generate", "assist3d.pipeline", True),
+    ("assist3d.cli.generate", "assist3d.fileio", False),
+    ("assist3d.cli.generate", "time", False),
+    ("assist3d.assets", "assist3d.assets.procedural", True),
+])
+def test_rule(module, target, ok):
+    assert _allowed(module, target) is ok
