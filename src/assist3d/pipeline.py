@@ -44,7 +44,7 @@ from .scene.planners import make_planner
 
 log = logging.getLogger(__name__)
 
-__all__ = ["STAGES", "scene_name", "SceneJob", "Generator", "generate_dataset", "DatasetRun", "run_benchmark"]
+__all__ = ["STAGES", "scene_name", "SceneJob", "SceneGenerator", "generate_dataset", "DatasetRun", "run_benchmark"]
 
 _SCENE_RE = re.compile(r"^scene_(\d{6,})$")
 THREAD_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
@@ -62,7 +62,7 @@ class SceneJob:
     verify: bool = False
 
 
-class Generator:
+class SceneGenerator:
     """Everything one process needs to generate scenes: the config and the opened catalog."""
 
     def __init__(self, cfg: GenerateConfig, *, threads: int | None = None) -> None:
@@ -133,12 +133,12 @@ def _with_classes(layout, classes):
 # worker processes
 # ------------------------------------------------------------------------------------------
 
-_WORKER: Generator | None = None
+_WORKER: SceneGenerator | None = None
 
 
 def _init_worker(cfg_json: dict, threads: int) -> None:
     global _WORKER
-    _WORKER = Generator(parse_config(cfg_json), threads=threads)
+    _WORKER = SceneGenerator(parse_config(cfg_json), threads=threads)
 
 
 def _run_job(job: SceneJob) -> dict:
@@ -278,7 +278,7 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
     threads = max(1, min(cfg.render.threads, cpus // workers)) if workers > 1 else cfg.render.threads
     if backend == "ray":
         raybackend.connect(ray_address)  # before anything is written
-    gen = Generator(cfg) if workers == 1 and backend == "local" else None  # in-process: open the catalog once
+    gen = SceneGenerator(cfg) if workers == 1 and backend == "local" else None  # in-process: open the catalog once
     if gen is not None:
         classes, assets_label = gen.classes, gen.assets_label
     else:
@@ -359,7 +359,7 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
         return DatasetRun(out, indices, skipped, generated, manifest, failed, errors, cluster)
 
 
-def _run_in_process(gen: Generator, jobs: list[SceneJob], done: Callable[[dict], None],
+def _run_in_process(gen: SceneGenerator, jobs: list[SceneJob], done: Callable[[dict], None],
                     fail: Callable[[int, BaseException], None]) -> None:
     for job in jobs:
         try:
@@ -429,7 +429,7 @@ def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, 
         cfg = parse_config({"seed": seed, "assets": {"library": assets}})
     check_render_memory(cfg)
     t0 = time.perf_counter()
-    gen = Generator(cfg)
+    gen = SceneGenerator(cfg)
     catalog_s = time.perf_counter() - t0
     with tempfile.TemporaryDirectory(prefix="assist3d-bench-") as tmp:
         root = Path(out) if out else Path(tmp)

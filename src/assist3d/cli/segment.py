@@ -178,9 +178,9 @@ def usable_points(where: str, scene_id: str, coord: np.ndarray) -> np.ndarray:
 
 def _inputs(spec: str):
     """Yield (scene_id, coord, color, sample-with-GT-or-None) for a file or a reader spec."""
-    from ..data import FORMATS, open_dataset
+    from ..data import READERS, open_dataset
 
-    if spec.split(":", 1)[0].strip().lower() not in FORMATS or Path(spec).exists():
+    if spec.split(":", 1)[0].strip().lower() not in READERS or Path(spec).exists():
         yield _scan_from_file(Path(spec))
         return
 

@@ -21,12 +21,13 @@ colours and normals are cleaned with a warning (``docs/evaluation.md``, "Input v
 
 from __future__ import annotations
 
-import difflib
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 from urllib.parse import parse_qsl
 
 from ..errors import ConfigError
+from ..registry import Registry
 from .array import ArrayDataset
 from .base import SceneDataset
 from .pointcept import PointceptDataset
@@ -34,34 +35,42 @@ from .s3dis import S3DISDataset
 from .scannet import ScanNetDataset
 from .scannetpp import ScanNetPPDataset
 
-__all__ = ["FORMATS", "SceneDataset", "open_dataset", "parse_spec"]
+__all__ = ["FORMATS", "READERS", "Reader", "SceneDataset", "open_dataset", "parse_spec"]
 
-_READERS: dict[str, tuple[Callable[..., SceneDataset], frozenset[str]]] = {
-    "scannet": (lambda p, **kw: ScanNetDataset(p, **kw), frozenset({"labels"})),
-    "scannetpp": (lambda p, **kw: ScanNetPPDataset(p, **kw), frozenset()),
-    "s3dis": (lambda p, **kw: S3DISDataset(p, **kw), frozenset({"cache"})),
-    "pointcept": (lambda p, **kw: PointceptDataset(p, fmt="pointcept", **kw), frozenset({"segment", "ignore"})),
-    "assist3d": (lambda p, **kw: PointceptDataset(p, fmt="assist3d", **kw), frozenset()),
-    "array": (lambda p, **kw: ArrayDataset(p, **kw), frozenset()),
-}
-FORMATS: tuple[str, ...] = tuple(_READERS)
+
+
+@dataclass(frozen=True)
+class Reader:
+    """A dataset format: ``open(path, **options)`` and the ``?key=value`` options it accepts."""
+
+    open: Callable[..., SceneDataset]
+    options: frozenset[str] = frozenset()
+
+
+#: dataset formats by name (the ``FORMAT`` of ``FORMAT:PATH``)
+READERS: Registry[Reader] = Registry("dataset format")
+READERS.add("scannet", Reader(lambda p, **kw: ScanNetDataset(p, **kw), frozenset({"labels"})))
+READERS.add("scannetpp", Reader(lambda p, **kw: ScanNetPPDataset(p, **kw)))
+READERS.add("s3dis", Reader(lambda p, **kw: S3DISDataset(p, **kw), frozenset({"cache"})))
+READERS.add("pointcept", Reader(lambda p, **kw: PointceptDataset(p, fmt="pointcept", **kw), frozenset({"segment", "ignore"})))
+READERS.add("assist3d", Reader(lambda p, **kw: PointceptDataset(p, fmt="assist3d", **kw)))
+READERS.add("array", Reader(lambda p, **kw: ArrayDataset(p, **kw)))
+FORMATS: tuple[str, ...] = READERS.names()  # the built-in formats
 
 
 def parse_spec(spec: str) -> tuple[str, Path, dict[str, str]]:
     """Split ``FORMAT:PATH[?key=value&...]`` into (format, path, options); validate the format."""
     if ":" not in spec:
-        raise ConfigError(f"dataset {spec!r}: expected FORMAT:PATH with FORMAT one of {', '.join(FORMATS)}")
+        raise ConfigError(f"dataset {spec!r}: expected FORMAT:PATH with FORMAT one of {', '.join(READERS.names())}")
     fmt, rest = spec.split(":", 1)
     fmt = fmt.strip().lower()
-    if fmt not in _READERS:
-        close = difflib.get_close_matches(fmt, FORMATS, n=1)
-        hint = f"; did you mean {close[0]!r}?" if close else f"; expected one of {', '.join(FORMATS)}"
-        raise ConfigError(f"dataset {spec!r}: unknown format {fmt!r}{hint}")
+    if fmt not in READERS:
+        raise ConfigError(f"dataset {spec!r}: unknown format {fmt!r}{READERS.hint(fmt)}")
     path, _, query = rest.partition("?")
     if not path:
         raise ConfigError(f"dataset {spec!r}: empty PATH")
     options = dict(parse_qsl(query, keep_blank_values=True, strict_parsing=False)) if query else {}
-    allowed = _READERS[fmt][1]
+    allowed = READERS.get(fmt).options
     unknown = sorted(set(options) - allowed)
     if unknown:
         raise ConfigError(
@@ -78,4 +87,4 @@ def open_dataset(spec: str) -> SceneDataset:
     dataset. Scenes load lazily, one :class:`PointSample` per ``dataset[i]`` or ``load(id)``.
     """
     fmt, path, options = parse_spec(spec)
-    return _READERS[fmt][0](path, **options)
+    return READERS.get(fmt).open(path, **options)

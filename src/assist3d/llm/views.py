@@ -3,38 +3,38 @@
 Two sources: the assembled scene mesh (ray casting, :func:`render_views`) and a labelled point
 cloud (z-buffered splats, :func:`render_point_views`), so any dataset folder can be scored, real
 scans included. Cameras stand inside the room near its corners, high up, looking down at the
-room's centre (the way people photograph rooms). Images are RGB PNG bytes from a small built-in
-encoder (byte-stable: no timestamps or software tags), so a cached score stays a cache hit.
+room's centre (the way people photograph rooms). Rays are cast with the renderer's ray caster
+(:mod:`assist3d.render.raycast`); images are RGB PNG bytes from Pillow without metadata
+(byte-stable), so a cached score stays a cache hit.
 """
 
 from __future__ import annotations
 
-import struct
-import zlib
+import io
 from typing import Callable
 
 import numpy as np
 
 from ..contracts import SceneMesh
 from ..errors import RenderError
+from ..render.camera import pixel_directions
+from ..render.raycast import make_caster
+from ..render.rgbd import face_normals
 
 FOV_DEG = 75.0
 BACKGROUND = np.array([235, 235, 235], dtype=np.float32)
 
 
 def encode_png(image: np.ndarray) -> bytes:
-    """PNG bytes of an (H, W, 3) uint8 RGB image."""
+    """PNG bytes of an (H, W, 3) uint8 RGB image (Pillow; no metadata, so the same image gives the
+    same bytes)."""
+    from PIL import Image
+
     if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
         raise ValueError(f"image: expected (H, W, 3) uint8, got {image.shape} {image.dtype}")
-    h, w, _ = image.shape
-    rows = np.concatenate([np.zeros((h, 1), np.uint8), np.ascontiguousarray(image).reshape(h, w * 3)], axis=1)
-
-    def chunk(tag: bytes, data: bytes) -> bytes:
-        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
-
-    header = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(rows.tobytes(), 6))
-            + chunk(b"IEND", b""))
+    buf = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(image), "RGB").save(buf, format="PNG", compress_level=6)
+    return buf.getvalue()
 
 
 def camera_positions(xy_min: np.ndarray, xy_max: np.ndarray, floor_z: float, height: float, n: int,
@@ -72,19 +72,15 @@ def _camera_axes(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
     return np.stack([r, d, f])
 
 
-def _pixel_rays(axes: np.ndarray, size: int) -> np.ndarray:
-    """(size*size, 3) unit ray directions, row-major from the top-left pixel."""
-    t = np.tan(np.radians(FOV_DEG) / 2)
-    s = (np.arange(size) + 0.5) / size * 2 - 1
-    u, v = np.meshgrid(s * t, s * t)
-    d = axes[2][None] + u.reshape(-1, 1) * axes[0][None] + v.reshape(-1, 1) * axes[1][None]
+def _view_rays(eye: np.ndarray, target: np.ndarray, size: int) -> np.ndarray:
+    """(size*size, 3) unit world ray directions of a square pinhole view, row-major from the top left."""
+    focal = size / 2 / np.tan(np.radians(FOV_DEG) / 2)
+    d = pixel_directions(size, size, focal, focal, (size - 1) / 2, (size - 1) / 2) @ _camera_axes(eye, target)
     return d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
 def render_views(scene_mesh: SceneMesh, n: int = 4, size: int = 512) -> list[bytes]:
     """``n`` PNG views (``size`` x ``size``) of the scene mesh, Lambert-shaded face colours."""
-    import trimesh
-
     if n < 1 or size < 8:
         raise ValueError(f"render_views: need n >= 1 and size >= 8, got n={n}, size={size}")
     v = scene_mesh.vertices.astype(np.float64)
@@ -97,19 +93,19 @@ def render_views(scene_mesh: SceneMesh, n: int = 4, size: int = 512) -> list[byt
     pts = v[f[floor_faces].ravel()] if floor_faces.any() else v
     floor_z = float(pts[:, 2].min())
     height = float(v[:, 2].max()) - floor_z
-    mesh = trimesh.Trimesh(v, f, process=False)
+    caster = make_caster("embree", v, f)
 
     def inside(xy: np.ndarray) -> np.ndarray:  # floor (or furniture) below the spot, from under the ceiling
         origins = np.column_stack([xy, np.full(len(xy), floor_z + 0.9 * max(height, 0.5))])
-        return mesh.ray.intersects_first(origins, np.tile([0.0, 0.0, -1.0], (len(xy), 1))) >= 0
+        return caster.cast(origins, np.tile([0.0, 0.0, -1.0], (len(xy), 1)))[1] >= 0
 
     eyes, target = camera_positions(pts[:, :2].min(0), pts[:, :2].max(0), floor_z, max(height, 2.0), n, inside)
-    normals = np.asarray(mesh.face_normals, np.float64)
+    normals = face_normals(scene_mesh, np.arange(len(f))).astype(np.float64)
     colors = scene_mesh.face_colors.astype(np.float32)
     out = []
     for eye in eyes:
-        dirs = _pixel_rays(_camera_axes(eye, target), size)
-        hit = mesh.ray.intersects_first(np.broadcast_to(eye, dirs.shape).copy(), dirs)
+        dirs = _view_rays(eye, target, size)
+        hit = caster.cast(np.broadcast_to(eye, dirs.shape), dirs)[1]
         img = np.broadcast_to(BACKGROUND, (len(dirs), 3)).copy()
         ok = hit >= 0
         shade = 0.35 + 0.65 * np.abs(np.einsum("ij,ij->i", normals[hit[ok]], dirs[ok]))

@@ -13,17 +13,18 @@ unit) directions; a hit point is ``origin + t * direction``.
 from __future__ import annotations
 
 import logging
-from typing import Protocol
+from typing import Callable, Protocol
 
 import numpy as np
 
 from ..errors import RenderError
+from ..registry import Registry
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RayCaster", "EmbreeCaster", "NumpyCaster", "make_caster", "BACKENDS"]
+__all__ = ["RayCaster", "EmbreeCaster", "NumpyCaster", "make_caster", "CASTERS", "BACKENDS"]
 
-BACKENDS = ("embree", "numpy")
+BACKENDS = ("embree", "numpy")  # the built-in casters (CASTERS below may hold more)
 
 
 class RayCaster(Protocol):
@@ -113,10 +114,12 @@ class NumpyCaster:
         return t_out.astype(np.float32), f_out
 
 
+#: ray casters by name: a factory ``(vertices, faces) -> RayCaster`` (``render.backend`` picks one)
+CASTERS: Registry[Callable[[np.ndarray, np.ndarray], RayCaster]] = Registry("render backend", error=RenderError)
+CASTERS.add("embree", EmbreeCaster)
+CASTERS.add("numpy", NumpyCaster)
+
+
 def make_caster(backend: str, vertices: np.ndarray, faces: np.ndarray) -> RayCaster:
-    """The ray caster named ``backend`` (one of :data:`BACKENDS`) over a triangle set."""
-    if backend == "embree":
-        return EmbreeCaster(vertices, faces)
-    if backend == "numpy":
-        return NumpyCaster(vertices, faces)
-    raise RenderError(f"unknown render backend {backend!r}; choose one of {', '.join(BACKENDS)}")
+    """The ray caster registered as ``backend`` in :data:`CASTERS` over a triangle set."""
+    return CASTERS.get(backend)(vertices, faces)

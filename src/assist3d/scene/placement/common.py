@@ -103,6 +103,15 @@ class RelationState:
         scores = total / count if count else np.ones(n)
         return scores, ok, ", ".join(hard)
 
+    def satisfying(self, k: int, c: Candidates, where: str) -> tuple[Candidates, np.ndarray, str]:
+        """The candidates of item ``k`` that satisfy its hard relations and their scores, or, when
+        none does, nothing and the reason (``"no free {where} satisfies hard relation(s) ..."``)."""
+        score, hard_ok, hard = self.evaluate(k, c)
+        if not hard_ok.any():
+            return c, score, f"no free {where} satisfies hard relation(s) {hard}"
+        keep = np.flatnonzero(hard_ok)
+        return c.take(keep), score[keep], ""
+
 
 def order_candidates(c: Candidates, rank: np.ndarray, score: np.ndarray, rng: np.random.Generator,
                      max_branch: int, spread: float) -> list[Choice]:

@@ -271,11 +271,9 @@ class FloorProblem:
         if not ok.any():
             return [], f"no free floor position for its {w:.2f} x {d:.2f} m footprint"
         c = c.take(np.flatnonzero(ok))
-        score, hard_ok, hard = self.rel.evaluate(k, c)
-        if not hard_ok.any():
-            return [], f"no free floor position satisfies hard relation(s) {hard}"
-        keep = np.flatnonzero(hard_ok)
-        c, score = c.take(keep), score[keep]
+        c, score, why = self.rel.satisfying(k, c, "floor position")
+        if why:
+            return [], why
         prior = np.zeros(len(c)) if self._has_global(k) else 1.0 - np.clip(c.back_gap / 1.0, 0, 1)  # type: ignore[operator]
         rank = score + PRIOR_WEIGHT * prior
         spread = max(0.5 * max(w, d), 2 * self.cfg.cell_size)

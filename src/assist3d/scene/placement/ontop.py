@@ -138,11 +138,9 @@ class OnTopProblem(MovingBoxesMixin):
         if not ok.any():
             return [], "no free position left on the support"
         c = c.take(np.flatnonzero(ok))
-        score, hard_ok, hard = self.rel.evaluate(k, c)
-        if not hard_ok.any():
-            return [], f"no free position on the support satisfies hard relation(s) {hard}"
-        keep = np.flatnonzero(hard_ok)
-        c, score = c.take(keep), score[keep]
+        c, score, why = self.rel.satisfying(k, c, "position on the support")
+        if why:
+            return [], why
         return order_candidates(c, score, score, self.rng, self.max_branch, max(0.5 * max(w, d), 0.05)), ""
 
     def min_future_skips(self, k: int, placed: int) -> int:

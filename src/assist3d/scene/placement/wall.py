@@ -146,11 +146,9 @@ class WallProblem(MovingBoxesMixin):
         if not ok.any():
             return [], f"no free wall position for its {w:.2f} m x {h:.2f} m front"
         c = self._expand(k, pos, ok)
-        score, hard_ok, hard = self.rel.evaluate(k, c)
-        if not hard_ok.any():
-            return [], f"no free wall position satisfies hard relation(s) {hard}"
-        keep = np.flatnonzero(hard_ok)
-        c, score = c.take(keep), score[keep]
+        c, score, why = self.rel.satisfying(k, c, "wall position")
+        if why:
+            return [], why
         pref = self._levels[k][1]
         prior = 1.0 - np.clip(np.abs(c.z - pref) / 1.0, 0, 1)
         rank = score + PRIOR_WEIGHT * prior
