@@ -262,3 +262,37 @@ def test_presets_load_and_paper_defaults():
     assert [d.resolved_kind() for d in paper.data.train] == ["real", "synthetic"]
     small = load_train_config(configs / "small-cpu.yaml")
     assert small.model.hidden < paper.model.hidden and small.threads == 1
+
+
+class _Recorder:
+    """A training logger that keeps every row it is given."""
+
+    def __init__(self):
+        self.rows, self.closed = [], False
+
+    def log(self, rows):
+        self.rows += [dict(r) for r in rows]
+
+    def close(self):
+        self.closed = True
+
+
+def test_custom_loggers_get_every_step_and_replace_the_default_files(tmp_path):
+    rec = _Recorder()
+    cfg = parse_train_config({**TINY, "optim": {**TINY["optim"], "epochs": 2}})
+    res = train(cfg, tmp_path, source=MemorySource(_scenes()), loggers=[rec])
+    assert [r["step"] for r in rec.rows] == [1, 2] and [r["epoch"] for r in rec.rows] == [1, 2] and rec.closed
+    assert all(np.isfinite(r["loss"]) for r in rec.rows) and rec.rows[-1]["loss"] == res.last_loss
+    assert not (tmp_path / "metrics.csv").exists()
+
+
+def test_csv_log_truncates_by_its_step_column(tmp_path):
+    from assist3d.engine.loggers import CsvLog
+
+    log = CsvLog(tmp_path / "m.csv", ("epoch", "step", "loss"))
+    log.log([{"epoch": 1, "step": s, "loss": 0.5} for s in (1, 2, 3)])
+    log.log([{"epoch": 2, "step": 4, "loss": 0.25}])
+    log.truncate(2)
+    assert (tmp_path / "m.csv").read_text().splitlines() == ["epoch,step,loss", "1,1,0.5", "1,2,0.5"]
+    log.log([{"epoch": 1, "step": 3, "loss": 0.125}])  # no second header
+    assert (tmp_path / "m.csv").read_text().splitlines()[1:] == ["1,1,0.5", "1,2,0.5", "1,3,0.125"]

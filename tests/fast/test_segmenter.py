@@ -161,6 +161,26 @@ def test_resumed_training_equals_an_uninterrupted_run(tiny_scenes, tmp_path, mon
     assert [r.split(",")[3:] for r in log_cut] == [r.split(",")[3:] for r in log_full]  # same losses
 
 
+def test_extra_loggers_get_the_rows_of_the_csv_log(tiny_scenes, tmp_path, one_thread):
+    class Recorder:
+        rows: list = []
+        closed = False
+
+        def log(self, rows):
+            self.rows = self.rows + [dict(r) for r in rows]
+
+        def close(self):
+            self.closed = True
+
+    rec = Recorder()
+    cfg = parse_segmenter_config(TINY_NET)
+    train_segmenter(cfg, tiny_scenes, tmp_path / "run", seed=0, budget=Budget(steps=3), loggers=[rec])
+    csv_rows = (tmp_path / "run" / "train_log.csv").read_text().splitlines()
+    assert csv_rows[0].startswith("step,") and [int(r.split(",")[0]) for r in csv_rows[1:]] == [1, 2, 3]
+    assert [r["step"] for r in rec.rows] == [1, 2, 3] and rec.closed
+    assert [round(r["loss"], 6) for r in rec.rows] == [float(r.split(",")[3]) for r in csv_rows[1:]]
+
+
 def test_loader_workers_build_the_same_batches_in_order(tiny_scenes):
     cfg = parse_segmenter_config(TINY_NET)
     with BatchLoader(tiny_scenes, cfg, seed=7, start=5) as inline:

@@ -7,7 +7,6 @@ events under ``tb/`` when the ``tensorboard`` package is installed. Only rank 0 
 
 from __future__ import annotations
 
-import csv
 import io
 import logging
 import math
@@ -15,7 +14,7 @@ import time
 from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Protocol
+from typing import Any, Callable, Protocol, Sequence
 
 import numpy as np
 import torch
@@ -28,6 +27,7 @@ from ..models.mask3d import Mask3D
 from ..models.sparse import set_backend
 from .config import ModelConfig, TrainConfig, dump_train_config, parse_train_config
 from .dist import DistInfo, all_reduce_mean, init_distributed, shutdown
+from .loggers import CsvLog, TensorBoardLog, TrainLogger, close_all, log_all
 from .losses import scene_loss
 from .scenes import SceneSource, prepare_scene
 from .voxelize import collate
@@ -229,8 +229,12 @@ _CSV_FIELDS = ["epoch", "step", "lr", "loss", "objectness", "mask_bce", "dice", 
 
 
 def train(cfg: TrainConfig, out_dir: str | Path, *, resume: bool = False, source: Source | None = None,
-          on_step: Callable[[dict], None] | None = None) -> TrainResult:
-    """Train ``cfg`` into ``out_dir`` (resuming from ``out_dir/last.pt`` when ``resume``)."""
+          on_step: Callable[[dict], None] | None = None, loggers: Sequence[TrainLogger] | None = None) -> TrainResult:
+    """Train ``cfg`` into ``out_dir`` (resuming from ``out_dir/last.pt`` when ``resume``).
+
+    Every step's row (``epoch, step, lr, loss, objectness, mask_bce, dice, scenes, seconds``) goes to
+    ``loggers`` on the main process: by default ``out_dir/metrics.csv`` and, when tensorboard is
+    installed, ``out_dir/tb`` (:mod:`.loggers`); ``on_step`` also gets it, for progress display."""
     out = Path(out_dir)
     device = resolve_device(cfg.device)
     info = init_distributed(device)
@@ -251,17 +255,15 @@ def train(cfg: TrainConfig, out_dir: str | Path, *, resume: bool = False, source
         trainer.restore(state)
         start_epoch, step = int(state["epoch"]), int(state["step"])
         log.info("resumed from %s at epoch %d, step %d", last, start_epoch, step)
-    writer = None
+    sinks: list[TrainLogger] = []
     if info.is_main:
         out.mkdir(parents=True, exist_ok=True)
         write_text_atomic(out / "config.yaml", dump_train_config(cfg))
-        try:
-            from torch.utils.tensorboard import SummaryWriter
-
-            writer = SummaryWriter(str(out / "tb"))
-        except ImportError:
-            writer = None
-    csv_path = out / "metrics.csv"
+        if loggers is None:
+            tb = TensorBoardLog.open(out / "tb", ("loss", "objectness", "mask_bce", "dice", "lr"))
+            sinks = [CsvLog(out / "metrics.csv", _CSV_FIELDS)] + ([tb] if tb is not None else [])
+        else:
+            sinks = list(loggers)
     t0 = time.perf_counter()
     last_loss = float("nan")
     ckpt = last
@@ -282,10 +284,7 @@ def train(cfg: TrainConfig, out_dir: str | Path, *, resume: bool = False, source
                        "objectness": stats.objectness, "mask_bce": stats.mask_bce, "dice": stats.dice,
                        "scenes": stats.scenes * info.world_size, "seconds": time.perf_counter() - ts}
                 if info.is_main:
-                    _append_csv(csv_path, row)
-                    if writer is not None:
-                        for k in ("loss", "objectness", "mask_bce", "dice", "lr"):
-                            writer.add_scalar(f"train/{k}", row[k], step)
+                    log_all(sinks, [row])
                     if on_step is not None:
                         on_step({**row, "epochs": cfg.optim.epochs, "steps_per_epoch": steps_per_epoch})
             if info.is_main:
@@ -296,20 +295,10 @@ def train(cfg: TrainConfig, out_dir: str | Path, *, resume: bool = False, source
                     save_checkpoint(ckpt, trainer.model, trainer.optimizer, trainer.scheduler, epoch + 1, step, cfg,
                                     trainer.scaler)
     finally:
-        if writer is not None:
-            writer.close()
+        close_all(sinks)
         shutdown(info)
     return TrainResult(out_dir=out, epochs=cfg.optim.epochs, steps=step, last_loss=last_loss, checkpoint=ckpt,
                        seconds=time.perf_counter() - t0)
-
-
-def _append_csv(path: Path, row: dict) -> None:
-    new = not path.exists()
-    with open(path, "a", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=_CSV_FIELDS)
-        if new:
-            w.writeheader()
-        w.writerow(row)
 
 
 def config_from_checkpoint(state: dict) -> TrainConfig:

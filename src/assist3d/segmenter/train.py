@@ -9,7 +9,6 @@ number of steps it reached is recorded).
 
 from __future__ import annotations
 
-import csv
 import logging
 import math
 import time
@@ -21,6 +20,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from ..engine.loggers import CsvLog, TrainLogger, close_all, log_all
 from ..errors import ConfigError
 from .checkpoint import load_segmenter, save_segmenter
 from .config import SegmenterConfig
@@ -90,26 +90,6 @@ def example_loss(model: Segmenter, examples: Sequence[Example], cfg: SegmenterCo
 LOG_FIELDS = ("step", "train_seconds", "lr", "loss", "bce", "offset", "direction")
 
 
-def _truncate_log(path: Path, step: int) -> None:
-    """Keep the log rows up to ``step`` (those of the checkpoint a run resumes from)."""
-    if not path.is_file():
-        return
-    lines = path.read_text().splitlines()
-    kept = lines[:1] + [ln for ln in lines[1:] if ln and int(ln.split(",", 1)[0]) <= step]
-    path.write_text("\n".join(kept) + "\n" if kept else "")
-
-
-def _append_log(path: Path, rows: list[dict]) -> None:
-    if not rows:
-        return
-    new = not path.is_file() or path.stat().st_size == 0
-    with open(path, "a", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=LOG_FIELDS)
-        if new:
-            w.writeheader()
-        w.writerows(rows)
-
-
 def _lr(cfg: SegmenterConfig, progress: float) -> float:
     p = min(max(progress, 0.0), 1.0)
     return cfg.optim.lr * (0.01 + 0.99 * 0.5 * (1 + math.cos(math.pi * p)))
@@ -117,8 +97,13 @@ def _lr(cfg: SegmenterConfig, progress: float) -> float:
 
 def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str | Path, *, seed: int,
                     budget: Budget, meta: dict | None = None, device: str = "cpu", loader_workers: int = 0,
-                    on_step: Callable[[dict], None] | None = None) -> TrainRecord:
+                    on_step: Callable[[dict], None] | None = None,
+                    loggers: Sequence[TrainLogger] = ()) -> TrainRecord:
     """Train on ``scenes`` into ``out_dir/last.pt`` (resumed when it exists); returns the record.
+
+    Each step's row (``step, train_seconds, lr, loss, bce, offset, direction``) goes to
+    ``out_dir/train_log.csv`` and to ``loggers`` (:mod:`assist3d.engine.loggers`), only when the
+    checkpoint that covers it is written, so a resumed run logs no step twice.
 
     ``loader_workers`` processes build the coming steps' examples while the network trains
     (:mod:`.loader`); the batches, and so the result, are the same for any number of workers.
@@ -144,41 +129,46 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
         last_loss = float(loaded.progress.get("loss", float("nan")))
         log.info("resumed %s at step %d (%.0f s trained)", last, step, seconds)
     meta = dict(meta or {})
-    log_path = out / "train_log.csv"
-    _truncate_log(log_path, step)
+    csv_log = CsvLog(out / "train_log.csv", LOG_FIELDS)
+    csv_log.truncate(step)
+    sinks: list[TrainLogger] = [csv_log, *loggers]
     pending: list[dict] = []
 
     def save() -> None:
         progress = {"step": step, "train_seconds": seconds, "loss": last_loss, "seed": seed, "budget": budget.as_dict()}
         save_segmenter(last, model, cfg, meta={**meta, **progress}, optimizer=opt, progress=progress)
-        _append_log(log_path, pending)  # rows reach the log only with the checkpoint that covers them
+        log_all(sinks, pending)  # rows reach the logs only with the checkpoint that covers them
         pending.clear()
 
-    last_save = time.perf_counter()
-    model.train()
-    with BatchLoader(scenes, cfg, seed, step, workers=loader_workers) as loader:
-        while budget.progress(step, seconds) < 1.0:
-            t0 = time.perf_counter()
-            _, examples = loader.next()
-            for g in opt.param_groups:
-                g["lr"] = _lr(cfg, budget.progress(step, seconds))
-            opt.zero_grad(set_to_none=True)
-            loss, parts = example_loss(model, examples, cfg, device)
-            if not math.isfinite(parts["loss"]):
-                raise FloatingPointError(f"training diverged at step {step} (loss {parts['loss']}); lower optim.lr")
-            loss.backward()
-            torch.nn.utils.clip_grad_norm_(model.parameters(), 5.0)
-            opt.step()
-            step += 1
-            seconds += time.perf_counter() - t0
-            last_loss = parts["loss"]
-            pending.append({"step": step, "train_seconds": round(seconds, 3), "lr": opt.param_groups[0]["lr"],
-                            **{k: round(v, 6) for k, v in parts.items()}})
-            if on_step is not None:
-                on_step({"step": step, "train_seconds": seconds, "progress": budget.progress(step, seconds),
-                         "lr": opt.param_groups[0]["lr"], **parts})
-            if time.perf_counter() - last_save > CHECKPOINT_EVERY_S:
-                save()
-                last_save = time.perf_counter()
-    save()
+    try:
+        last_save = time.perf_counter()
+        model.train()
+        with BatchLoader(scenes, cfg, seed, step, workers=loader_workers) as loader:
+            while budget.progress(step, seconds) < 1.0:
+                t0 = time.perf_counter()
+                _, examples = loader.next()
+                for g in opt.param_groups:
+                    g["lr"] = _lr(cfg, budget.progress(step, seconds))
+                opt.zero_grad(set_to_none=True)
+                loss, parts = example_loss(model, examples, cfg, device)
+                if not math.isfinite(parts["loss"]):
+                    raise FloatingPointError(f"training diverged at step {step} (loss {parts['loss']}); lower optim.lr")
+                loss.backward()
+                torch.nn.utils.clip_grad_norm_(model.parameters(), 5.0)
+                opt.step()
+                step += 1
+                seconds += time.perf_counter() - t0
+                last_loss = parts["loss"]
+                pending.append({"step": step, "train_seconds": round(seconds, 3), "lr": opt.param_groups[0]["lr"],
+                                **{k: round(v, 6) for k, v in parts.items()}})
+                if on_step is not None:
+                    on_step({"step": step, "train_seconds": seconds, "progress": budget.progress(step, seconds),
+                             "lr": opt.param_groups[0]["lr"], **parts})
+                if time.perf_counter() - last_save > CHECKPOINT_EVERY_S:
+                    save()
+                    last_save = time.perf_counter()
+        save()
+    finally:
+        close_all(sinks)
+
     return TrainRecord(steps=step, train_seconds=seconds, last_loss=last_loss, checkpoint=last)
