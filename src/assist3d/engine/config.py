@@ -60,6 +60,9 @@ class DataConfig(Section):
     max_points: int = Field(0, ge=0, le=100_000_000, description="random crop to this many points per scene "
                                                                  "(0 = no crop; at most 100,000,000)")
     cache_scenes: bool = Field(False, description="keep every loaded scene in memory (small datasets)")
+    workers: int = Field(0, ge=0, le=64, description="processes that prepare the coming batches (crop, augment, "
+                                                     "voxelise) while the model trains; 0 = in the training "
+                                                     "process. The batches are the same for any number.")
 
 
 class AugmentConfig(Section):

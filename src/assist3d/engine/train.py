@@ -14,7 +14,7 @@ import time
 from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Protocol, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 import torch
@@ -27,18 +27,13 @@ from ..models.mask3d import Mask3D
 from ..models.sparse import set_backend
 from .config import ModelConfig, TrainConfig, dump_train_config, parse_train_config
 from .dist import DistInfo, all_reduce_mean, init_distributed, shutdown
+from .loader import PreparedBatch, Source, epoch_batches, prepare_batch
 from .loggers import CsvLog, TensorBoardLog, TrainLogger, close_all, log_all
 from .losses import scene_loss
-from .scenes import SceneSource, prepare_scene
+from .scenes import SceneSource
 from .voxelize import collate
 
 log = logging.getLogger(__name__)
-
-
-class Source(Protocol):
-    def __len__(self) -> int: ...
-    def sample(self, i: int) -> PointSample: ...
-    def is_synthetic(self, i: int) -> bool: ...
 
 
 class MemorySource:
@@ -150,10 +145,14 @@ class Trainer:
         self.scaler = torch.amp.GradScaler("cuda") if self.use_amp and self.amp_dtype == torch.float16 else None
 
     def batch_loss(self, indices: list[int], *, rng: np.random.Generator, augment: bool = True) -> tuple[torch.Tensor, StepStats]:
-        """Forward one batch and return the weighted loss (synthetic scenes x ``synthetic_alpha``)."""
+        """Prepare the scenes ``indices`` with ``rng`` and return their weighted loss (:meth:`prepared_loss`)."""
+        return self.prepared_loss(prepare_batch(self.source, self.cfg, indices, rng=rng, augment=augment), rng=rng)
+
+    def prepared_loss(self, batch: PreparedBatch, *, rng: np.random.Generator) -> tuple[torch.Tensor, StepStats]:
+        """Forward one prepared batch and return the weighted loss (synthetic scenes x ``synthetic_alpha``);
+        ``rng`` draws the points the losses are computed on when ``loss.num_points`` is set."""
         dcfg = self.cfg.data
-        prepared = [prepare_scene(self.source.sample(i), dcfg.voxel_size, self.cfg.augment if augment else None,
-                                  dcfg.max_points, rng=rng) for i in indices]
+        indices, prepared = batch.indices, batch.scenes
         coords, feats = collate([v for v, _ in prepared], self.device)
         ctx = torch.autocast("cuda", dtype=self.amp_dtype) if self.use_amp else nullcontext()
         with ctx:
@@ -175,9 +174,14 @@ class Trainer:
         return loss, StepStats(float(loss.detach()), *stats.tolist(), scenes=len(indices))
 
     def step(self, indices: list[int], *, rng: np.random.Generator) -> StepStats:
+        """One optimisation step on the scenes ``indices``, prepared here with ``rng``."""
+        return self.step_prepared(prepare_batch(self.source, self.cfg, indices, rng=rng), rng=rng)
+
+    def step_prepared(self, batch: PreparedBatch, *, rng: np.random.Generator) -> StepStats:
+        """One optimisation step on a batch the loader prepared (:mod:`.loader`)."""
         self.model.train()
         self.optimizer.zero_grad(set_to_none=True)
-        loss, stats = self.batch_loss(indices, rng=rng)
+        loss, stats = self.prepared_loss(batch, rng=rng)
         if self.scaler is not None:
             self.scaler.scale(loss).backward()
             self.scaler.unscale_(self.optimizer)
@@ -271,12 +275,14 @@ def train(cfg: TrainConfig, out_dir: str | Path, *, resume: bool = False, source
         for epoch in range(start_epoch, cfg.optim.epochs):
             sampler.set_epoch(epoch)
             order = list(sampler)
-            rng = np.random.default_rng(np.random.SeedSequence([cfg.seed, epoch, info.rank]))
             torch.manual_seed(cfg.seed * 1_000_003 + epoch * 101 + info.rank)
-            for b in range(0, len(order), bs):
+            batches = epoch_batches(src, cfg, order, epoch=epoch, rank=info.rank, workers=cfg.data.workers)
+            for b in range(steps_per_epoch):
                 ts = time.perf_counter()
+                batch = next(batches)
                 lr = trainer.optimizer.param_groups[0]["lr"]  # the rate this step uses
-                stats = trainer.step(order[b:b + bs], rng=rng)
+                # the loss-point draw has its own stream, so it does not depend on where the batch was built
+                stats = trainer.step_prepared(batch, rng=np.random.default_rng([cfg.seed, epoch, info.rank, b, 1]))
                 step += 1
                 loss_t = all_reduce_mean(torch.tensor(stats.loss, device=device), info)
                 last_loss = float(loss_t)
@@ -287,6 +293,7 @@ def train(cfg: TrainConfig, out_dir: str | Path, *, resume: bool = False, source
                     log_all(sinks, [row])
                     if on_step is not None:
                         on_step({**row, "epochs": cfg.optim.epochs, "steps_per_epoch": steps_per_epoch})
+            batches.close()  # stops the loader's workers
             if info.is_main:
                 save_checkpoint(last, trainer.model, trainer.optimizer, trainer.scheduler, epoch + 1, step, cfg,
                                 trainer.scaler)
