@@ -16,9 +16,7 @@ BACKENDS = ["torch", pytest.param("spconv", marks=pytest.mark.skipif(not spconv_
 
 @pytest.fixture(params=BACKENDS)
 def backend(request):
-    sp.set_backend(request.param)
-    yield request.param
-    sp.set_backend("torch")
+    return request.param
 
 
 DT = torch.float32
@@ -56,7 +54,7 @@ def test_submanifold_equals_dense(k, backend):
     gen = torch.Generator().manual_seed(k)
     coords = _random_sites(gen, 2, 7, 150)
     feats = torch.randn(150, 4, generator=gen, dtype=DT, requires_grad=True)
-    conv = sp.SubMConv3d(4, 5, kernel_size=k).to(DT)
+    conv = sp.use_backend(sp.SubMConv3d(4, 5, kernel_size=k).to(DT), backend)
     out = conv(sp.sparse_tensor(coords, feats)).feats
     dense_w = conv.weight.detach().clone().reshape(k, k, k, 4, 5).permute(4, 3, 0, 1, 2).requires_grad_(True)
     feats2 = feats.detach().clone().requires_grad_(True)
@@ -88,7 +86,7 @@ def test_down_and_up_equal_dense(backend):
     # the coarse sites are exactly the parents of the active sites
     parents = {tuple(r) for r in torch.cat([coords[:, :1], coords[:, 1:] // 2], 1).tolist()}
     assert {tuple(r) for r in y.coords.tolist()} == parents
-    up = sp.UpConv3d(4, 2).to(DT)
+    up = sp.use_backend(sp.UpConv3d(4, 2).to(DT), backend)
     z = up(y, x)
     up_w = up.weight.detach().clone().reshape(2, 2, 2, 4, 2).permute(3, 4, 0, 1, 2).requires_grad_(True)
     ref_z = _read(F.conv_transpose3d(dense_y, up_w, stride=2), coords)
@@ -125,3 +123,16 @@ def test_spconv_cpu_calls_run_single_threaded(monkeypatch):
         assert seen == [1] and torch.get_num_threads() == 2
     finally:
         torch.set_num_threads(before)
+
+
+def test_the_kernel_choice_belongs_to_each_model():
+    a = torch.nn.ModuleList([sp.SubMConv3d(2, 2), sp.UpConv3d(2, 2), sp.DownConv3d(2, 2)])
+    b = torch.nn.ModuleList([sp.SubMConv3d(2, 2)])
+    assert sp.use_backend(a, "torch") is a
+    assert [m.backend for m in a if hasattr(m, "backend")] == ["torch", "torch"] and b[0].backend == "torch"
+    with pytest.raises(ValueError, match="unknown sparse backend"):
+        sp.use_backend(a, "cuda")
+    if not spconv_backend.available():
+        with pytest.raises(Exception, match="spconv"):
+            sp.use_backend(b, "spconv")
+        assert b[0].backend == "torch"  # a refused switch changes nothing

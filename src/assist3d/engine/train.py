@@ -24,7 +24,7 @@ from ..contracts import PointSample
 from ..errors import ConfigError, DataError
 from ..fileio import write_bytes_atomic, write_text_atomic
 from ..models.mask3d import Mask3D
-from ..models.sparse import set_backend
+from ..models.sparse import use_backend
 from .config import ModelConfig, TrainConfig, dump_train_config, parse_train_config
 from .dist import DistInfo, all_reduce_mean, init_distributed, shutdown
 from .loader import PreparedBatch, Source, epoch_batches, prepare_batch
@@ -70,8 +70,8 @@ def resolve_device(name: str) -> str:
 
 def build_model(cfg: ModelConfig) -> torch.nn.Module:
     kwargs = cfg.model_dump()
-    set_backend(kwargs.pop("backend"))
-    return Mask3D(**kwargs)
+    backend = kwargs.pop("backend")
+    return use_backend(Mask3D(**kwargs), backend)
 
 
 def save_checkpoint(path: Path, model: torch.nn.Module, optimizer: Any, scheduler: Any, epoch: int, step: int,

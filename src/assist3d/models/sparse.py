@@ -30,23 +30,27 @@ from torch import nn
 
 from . import spconv_backend
 
-_BACKEND = {"name": "torch"}
 _BITS = 16  # bits per spatial axis in a key (65,536 voxels = 1.3 km at 2 cm)
 _MASK = (1 << _BITS) - 1
 _HALF = 1 << (_BITS - 1)
 
 
-def set_backend(name: str) -> None:
-    """Select the convolution kernels: ``torch`` (pure PyTorch, default) or ``spconv`` (if installed)."""
-    if name not in ("torch", "spconv"):
+#: the convolution kernels a sparse convolution can run on
+BACKENDS = ("torch", "spconv")
+
+
+def use_backend(module: nn.Module, name: str) -> nn.Module:
+    """Run every submanifold and transposed convolution inside ``module`` on ``name``'s kernels:
+    ``torch`` (pure PyTorch, the default of every new layer) or ``spconv`` (if installed). A
+    per-model setting: two models in one process may use different kernels. Returns ``module``."""
+    if name not in BACKENDS:
         raise ValueError(f"unknown sparse backend {name!r}; expected 'torch' or 'spconv'")
     if name == "spconv":
         spconv_backend._spconv()
-    _BACKEND["name"] = name
-
-
-def get_backend() -> str:
-    return _BACKEND["name"]
+    for m in module.modules():
+        if isinstance(m, (SubMConv3d, UpConv3d)):
+            m.backend = name
+    return module
 
 
 def encode_keys(coords: torch.Tensor) -> torch.Tensor:
@@ -172,6 +176,7 @@ class SubMConv3d(nn.Module):
         if kernel_size % 2 != 1:
             raise ValueError(f"SubMConv3d needs an odd kernel size, got {kernel_size}")
         self.kernel_size = kernel_size
+        self.backend = "torch"  # see use_backend
         self.weight = nn.Parameter(torch.empty(kernel_size ** 3, in_channels, out_channels))
         _init_weight(self.weight, in_channels * kernel_size ** 3)
         self.bias = nn.Parameter(torch.zeros(out_channels)) if bias else None
@@ -179,7 +184,7 @@ class SubMConv3d(nn.Module):
     def forward(self, x: SparseTensor) -> SparseTensor:
         feats = x.feats
         w = self.weight.to(feats.dtype)
-        if _BACKEND["name"] == "spconv":
+        if self.backend == "spconv":
             out = spconv_backend.subm_conv(x.coords, feats, w, self.kernel_size)
             if self.bias is not None:
                 out = out + self.bias.to(out.dtype)
@@ -274,6 +279,7 @@ class UpConv3d(nn.Module):
 
     def __init__(self, in_channels: int, out_channels: int, bias: bool = False):
         super().__init__()
+        self.backend = "torch"  # see use_backend
         self.weight = nn.Parameter(torch.empty(8, in_channels, out_channels))
         _init_weight(self.weight, in_channels)
         self.bias = nn.Parameter(torch.zeros(out_channels)) if bias else None
@@ -283,7 +289,7 @@ class UpConv3d(nn.Module):
         if x.cset is not coarse:
             raise ValueError("UpConv3d: the input is not the stride-2 parent of the target coordinates")
         w = self.weight.to(x.feats.dtype)
-        if _BACKEND["name"] == "spconv":
+        if self.backend == "spconv":
             sites, feats = spconv_backend.up_conv(x.coords, x.feats, w)
             rows = CoordSet.build(sites).lookup(target.coords)
             if bool((rows < 0).any()):

@@ -8,7 +8,7 @@ the pure-PyTorch coordinate order, so the two backends are interchangeable layer
 transposed convolution has no cheap "onto these coordinates" form in spconv without sharing its
 index dictionary, so it generates all eight children and the caller keeps the target ones.
 
-Enable with ``set_backend("spconv")`` (``model.backend: spconv`` in a training config).
+Enable with ``use_backend(model, "spconv")`` (``model.backend: spconv`` in a training config).
 
 On CPU, spconv 2.3's kernels run on PyTorch's intra-op thread pool and, with more than one thread,
 now and then return wrong rows (measured: 1 of 30 identical submanifold calls differed, by up to
