@@ -193,14 +193,14 @@ def test_s3dis_other_malformed_content_is_an_error(tmp_path):
         open_dataset(f"s3dis:{tmp_path}")[0]
 
 
-def _pointcept_scene(d: Path, seg_name: str = "segment20") -> None:
+def _pointcept_scene(d: Path, seg_name: str = "segment20", labels: type = np.int64) -> None:
     d.mkdir(parents=True)
     n = 6
     np.save(d / "coord.npy", np.arange(n * 3, dtype=np.float32).reshape(n, 3))
     np.save(d / "color.npy", np.full((n, 3), 7, np.uint8))
     np.save(d / "normal.npy", np.tile(np.array([0, 0, 1], np.float32), (n, 1)))
-    np.save(d / f"{seg_name}.npy", np.array([0, 1, 4, 4, -1, 6], np.int64))
-    np.save(d / "instance.npy", np.array([0, 1, 2, 2, 3, -1], np.int64))
+    np.save(d / f"{seg_name}.npy", np.array([0, 1, 4, 4, -1, 6], labels))
+    np.save(d / "instance.npy", np.array([0, 1, 2, 2, 3, -1], labels))
 
 
 def test_pointcept_split_folders_and_scannet_rule(tmp_path):
@@ -219,7 +219,7 @@ def test_pointcept_split_folders_and_scannet_rule(tmp_path):
 
 def test_assist3d_format_keeps_every_instance(tmp_path):
     d = tmp_path / "out" / "scene_00000"
-    _pointcept_scene(d, "segment")
+    _pointcept_scene(d, "segment", labels=np.int32)  # the writer's dtypes
     (d / "meta.json").write_text("{}")
     (d / "layout.json").write_text("{}")
     (tmp_path / "out" / "manifest.json").write_text("{}")
@@ -229,6 +229,21 @@ def test_assist3d_format_keeps_every_instance(tmp_path):
     s = ds[0]
     assert s.scene_id == "scene_00000"
     assert s.instance.tolist() == [0, 1, 2, 2, 3, -1]
+
+
+def test_assist3d_format_is_read_strictly(tmp_path):
+    """Our own format has one reader, the writer's strict one: a wrong dtype or a missing array is an
+    error naming the file (the lax pointcept: reader would have converted or defaulted it)."""
+    d = tmp_path / "out" / "scene_00000"
+    _pointcept_scene(d, "segment")  # int64 labels: not what the writer writes
+    (d / "meta.json").write_text("{}")
+    with pytest.raises(DataError, match=r"instance\.npy: expected int32"):
+        open_dataset(f"assist3d:{tmp_path / 'out'}")[0]
+    np.save(d / "instance.npy", np.array([0, 1, 2, 2, 3, -1], np.int32))
+    np.save(d / "segment.npy", np.array([0, 1, 4, 4, -1, 6], np.int32))
+    (d / "normal.npy").unlink()
+    with pytest.raises(DataError, match=r"normal\.npy: missing"):
+        open_dataset(f"assist3d:{tmp_path / 'out'}")[0]
 
 
 def test_pointcept_shape_mismatch(tmp_path):

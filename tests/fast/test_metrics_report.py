@@ -45,6 +45,8 @@ def _write_dataset(root, catalog_dir, layouts):
         np.save(d / "coord.npy", coord)
         np.save(d / "instance.npy", np.concatenate(inst).astype(np.int32))
         np.save(d / "segment.npy", np.zeros(len(coord), np.int32))
+        np.save(d / "color.npy", np.full((len(coord), 3), 128, np.uint8))  # every array the writer writes
+        np.save(d / "normal.npy", np.tile(np.array([0, 0, 1], np.float32), (len(coord), 1)))
         (d / "layout.json").write_text(json.dumps(layout.to_json()))
         (d / "meta.json").write_text("{}")
     # `assist3d generate` records the catalog folder under "assets"

@@ -14,8 +14,10 @@ excluded. Options (``pointcept:PATH?segment=segment200&ignore=0,2``) override th
 excluded classes.
 
 ``assist3d:PATH`` reads our generator's output (the same layout plus ``layout.json`` and
-``meta.json`` per scene): every ``instance >= 0`` point is an object. The generator writes
-``meta.json`` last, so folders without it (an interrupted or running job) are skipped.
+``meta.json`` per scene) strictly, through :func:`assist3d.export.writer.load_scene_arrays` (all of
+``coord, color, normal, instance, segment`` with the writer's dtypes): every ``instance >= 0``
+point is an object. The generator writes ``meta.json`` last, so folders without it (an
+interrupted or running job) are skipped.
 
 Validation (``docs/evaluation.md``, "Input validation"): arrays whose lengths disagree, empty scenes,
 non-numeric arrays, non-finite or far-out coordinates, fractional or non-finite labels, and class
@@ -32,7 +34,7 @@ import numpy as np
 
 from ..contracts import PointSample
 from ..errors import DataError
-from ..export.writer import META_NAME
+from ..export.writer import META_NAME, load_scene_arrays
 from .base import (MAX_CLASS_INDEX, MAX_INSTANCE_ID, SceneDataset, checked_coords, clean_colors, clean_normals,
                    integer_labels, read_npy)
 
@@ -92,6 +94,8 @@ class PointceptDataset(SceneDataset):
 
     def _load(self, scene_id: str) -> PointSample:
         d = self._dirs[scene_id]
+        if self.format == "assist3d":
+            return _load_ours(scene_id, d)
         coord_path = d / "coord.npy"
         coord = read_npy(coord_path)
         if coord.ndim != 2 or coord.shape[1] != 3:
@@ -135,6 +139,24 @@ class PointceptDataset(SceneDataset):
             segment=segment_i,
             valid=np.ones(n, bool),
         )
+
+
+def _load_ours(scene_id: str, d: Path) -> PointSample:
+    """A scene folder of our own format, read by the one strict reader of it
+    (:func:`assist3d.export.writer.load_scene_arrays`: every array present, exact dtypes and shapes),
+    then checked like any reader's input."""
+    a = load_scene_arrays(d)
+    return PointSample(
+        scene_id=scene_id,
+        coord=checked_coords(d / "coord.npy", a["coord"]),
+        color=_colors(d / "color.npy", a["color"]),
+        normal=clean_normals(d / "normal.npy", a["normal"]),
+        instance=integer_labels(d / "instance.npy", a["instance"], "instance ids", low=-1, high=MAX_INSTANCE_ID,
+                                void_below=True),
+        segment=integer_labels(d / "segment.npy", a["segment"], "class indices", low=-1, high=MAX_CLASS_INDEX,
+                               void_below=True),
+        valid=np.ones(len(a["coord"]), bool),
+    )
 
 
 def _colors(path: Path, color: np.ndarray) -> np.ndarray:
