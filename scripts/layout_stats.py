@@ -72,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
             problems.append(len(check(lay, catalog)))
             check_s += time.perf_counter() - c0
         if args.png_dir:
-            from assist3d.scene.topdown import render_topdown
+            from assist3d.export.topdown import render_topdown
 
             render_topdown(lay, catalog, Path(args.png_dir) / f"scene_{k:03d}.png")
     n = max(1, args.scenes)

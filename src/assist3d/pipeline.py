@@ -33,12 +33,13 @@ from .bounds import MAX_WORKERS, check_render_memory, check_scene_indices
 from .config import GenerateConfig, config_to_dict, dump_config, parse_config
 from .errors import AssistError, ConfigError, DataError, FaultError, describe_os_error, fault_advice, shown
 from .export import Manifest, read_scene_meta, write_scene
+from .export.glb import export_glb
 from .export.writer import remove_stale_temps
 from .interrupts import Interrupted, worker_pool
 from .records import STAGES, LLMUsage, SceneRecord, StageTimings, stage_timings
 from .render import make_caster, render_point_cloud, verify_labels
 from .rng import make_rng, scene_seed
-from .scene.assemble import assemble_scene, export_glb
+from .scene.assemble import assemble_scene
 from .scene.layout import build_layout
 from .scene.planners import make_planner
 

@@ -7,7 +7,8 @@ import pytest
 
 from assist3d.config import LayoutConfig
 from assist3d.contracts import PlacedInstance, SceneLayout
-from assist3d.scene.assemble import assemble_scene, export_glb
+from assist3d.export.glb import export_glb
+from assist3d.scene.assemble import assemble_scene
 from assist3d.scene.checks import check_layout
 from assist3d.scene.geometry import pose_matrix
 from assist3d.scene.placement import place_group

@@ -205,7 +205,7 @@ def test_randomrooms_mode_uses_random_placement(tmp_path):
 
 
 def test_topdown_png(tmp_path):
-    from assist3d.scene.topdown import render_topdown
+    from assist3d.export.topdown import render_topdown
 
     cat = make_catalog(tmp_path / "cat")
     lay = build_layout(cat, _cfg(), 4, placer=STANDIN)

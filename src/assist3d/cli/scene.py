@@ -58,11 +58,11 @@ def layout_cmd(
     out.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out / "layout.json", layout.to_json())
     if not no_glb:
-        from ..scene.assemble import export_glb
+        from ..export.glb import export_glb
 
         export_glb(layout, catalog, out / "scene.glb")
     if png:
-        from ..scene.topdown import render_topdown
+        from ..export.topdown import render_topdown
 
         render_topdown(layout, catalog, out / "layout.png", title=f"seed {seed} ({cfg.preset})")
     s = layout_summary(layout)
@@ -92,7 +92,7 @@ def layout_png_cmd(
 ) -> None:
     """Render a top-down picture of an existing layout."""
     from ..assets import open_catalog
-    from ..scene.topdown import render_topdown
+    from ..export.topdown import render_topdown
 
     try:
         data = json.loads(layout_json.read_text(encoding="utf-8"))

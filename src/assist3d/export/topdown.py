@@ -17,7 +17,7 @@ from ..assets.catalog import Catalog
 from ..contracts import SceneLayout
 from ..errors import shown
 from ..fileio import write_bytes_atomic
-from .room import opening_segment
+from ..scene.room import opening_segment
 
 log = logging.getLogger(__name__)
 
