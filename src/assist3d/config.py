@@ -16,7 +16,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from .errors import ConfigError, shown
 from .fileio import write_text_atomic
-from .scene.roomtypes import ROOM_TEMPLATES
+from .taxonomy.roomtypes import ROOM_TEMPLATES
 
 
 class Section(BaseModel):
@@ -94,10 +94,10 @@ class SelectionConfig(Section):
         "heterogeneous", description="'heterogeneous': the paper's random draws (floor_count, wall_count, "
                                      "on_top_count per support); 'room-type': a Holodeck-style room: a room type "
                                      "drawn per scene and its typical object list with quantities "
-                                     "(assist3d.scene.roomtypes; floor_count and wall_count are then unused, "
+                                     "(assist3d.taxonomy.roomtypes; floor_count and wall_count are then unused, "
                                      "on_top_count still applies).")
     room_types: list[str] | None = Field(None, description="Room types drawn from with strategy 'room-type' "
-                                                           "(None = all of assist3d.scene.roomtypes.ROOM_TEMPLATES).")
+                                                           "(None = all of assist3d.taxonomy.roomtypes.ROOM_TEMPLATES).")
     on_top_fit: bool = Field(True, description="Draw a support's K on-top assets only among those whose box fits "
                                                "one of its surfaces (footprint, either way round, and clearance); "
                                                "paper: unspecified. False = the whole on-top pool.")

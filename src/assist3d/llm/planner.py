@@ -31,7 +31,7 @@ from ..config import LLMConfig
 from ..contracts import Relation, Room
 from ..errors import ConfigError, LLMError, inert
 from ..scene.relations import CROSS_GROUP, GroupPlan, PlannedObject, Planner, PlanRequest, validate_plan
-from ..scene.roomtypes import RoomTemplate
+from ..taxonomy.roomtypes import RoomTemplate
 from .cache import ResponseCache
 from .client import ChatAnswer, ChatClient, Usage
 from .prompts import render_plan_messages, render_repair_message

@@ -3,7 +3,7 @@
 It implements :class:`assist3d.scene.relations.Planner` (``name = "rules"``) and is the offline
 default and the fallback of the LLM planner. All knowledge lives in three data tables below
 (:data:`FLOOR_RULES`, :data:`WALL_RULES`, :data:`ON_TOP_RULES`), keyed by canonical class names
-(see :mod:`assist3d.scene.classes`); a class not found there falls back to its head noun and then
+(see :mod:`assist3d.taxonomy.classes`); a class not found there falls back to its head noun and then
 to size-based defaults.
 
 Ordering: objects are sorted by ``tier`` (anchors such as beds and tables first, the objects that
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..contracts import AssetRecord, PlacedInstance, Relation
-from .classes import canonical_class, normalise_class
+from ..taxonomy.classes import canonical_class, normalise_class
 from .relations import GroupPlan, PlannedObject, PlanRequest, group_kind
 
 log = logging.getLogger(__name__)

@@ -11,7 +11,7 @@ probability that a room has them, the quantities (four to six identical dining c
 objects and the small objects of the room. Retrieval is modelled by ``selection.assets_per_class``
 (a fixed few models per class).
 
-Class names are canonical (:func:`assist3d.scene.classes.canonical_class`); an item matches every
+Class names are canonical (:func:`assist3d.taxonomy.classes.canonical_class`); an item matches every
 asset whose class or canonical class is the item's class. Every class here is produced by the
 built-in procedural library (a test checks); other catalogs may lack some, which are then skipped
 and counted (``template_misses`` in the selection stats).
