@@ -224,7 +224,7 @@ class Room:
 class Relation:
     """A spatial relation of a planned object to an earlier object of its group.
 
-    ``kind`` is one of :data:`assist3d.scene.relations.RELATIONS`; ``target`` is the index (in
+    ``kind`` is one of :data:`assist3d.planning.relations.RELATIONS`; ``target`` is the index (in
     the planned order) of an earlier object, or ``None`` for global relations (edge, middle,
     height); ``value`` carries a number where the kind needs one (height range bounds in metres,
     a distance); ``hard`` relations filter candidate placements, soft ones only rank them.

@@ -41,7 +41,7 @@ from .render import make_caster, render_point_cloud, verify_labels
 from .rng import make_rng, scene_seed
 from .scene.assemble import assemble_scene
 from .scene.layout import build_layout
-from .scene.planners import make_planner
+from .planning.planners import make_planner
 
 log = logging.getLogger(__name__)
 

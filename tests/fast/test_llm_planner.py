@@ -13,7 +13,7 @@ import pytest
 from assist3d.config import LLMConfig
 from assist3d.contracts import AssetRecord, Opening, PlacedInstance, Relation, Room
 from assist3d.llm.planner import LLMPlanner
-from assist3d.scene.relations import GroupPlan, PlannedObject, PlanRequest, group_kind, validate_plan
+from assist3d.planning.relations import GroupPlan, PlannedObject, PlanRequest, group_kind, validate_plan
 from llm_fakeserver import SENTINEL, FakeServer, Step, files_containing
 
 MODEL = "fake-model"

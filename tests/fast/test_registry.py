@@ -13,8 +13,8 @@ from assist3d.data.array import ArrayDataset
 from assist3d.errors import ConfigError, RenderError
 from assist3d.registry import Registry
 from assist3d.render.raycast import CASTERS, NumpyCaster, make_caster
-from assist3d.scene.planners import PLANNERS, make_planner, planner_name
-from assist3d.scene.rules import RulePlanner
+from assist3d.planning.planners import PLANNERS, make_planner, planner_name
+from assist3d.planning.rules import RulePlanner
 
 
 def test_registry_lookup_suggestions_and_duplicates():

@@ -12,7 +12,7 @@ from assist3d.scene.assemble import assemble_scene
 from assist3d.scene.checks import check_layout
 from assist3d.scene.geometry import pose_matrix
 from assist3d.scene.placement import place_group
-from assist3d.scene.relations import PlanRequest
+from assist3d.planning.relations import PlanRequest
 from assist3d.scene.shell import build_shell
 
 from test_scene_placement_kit import DOOR, WINDOW, box_asset, make_catalog, plan, rect_room, shelf_asset, table_asset

@@ -13,8 +13,8 @@ from assist3d.config import GenerateConfig
 from assist3d.contracts import AssetRecord, DroppedObject, MeshData, PlacedInstance, Relation, SupportSurface
 from assist3d.scene import layout as layout_mod
 from assist3d.scene.layout import build_layout, sanitise_plan
-from assist3d.scene.relations import GroupPlan, PlannedObject, PlanRequest
-from assist3d.scene.rules import RulePlanner
+from assist3d.planning.relations import GroupPlan, PlannedObject, PlanRequest
+from assist3d.planning.rules import RulePlanner
 
 SPECS = [  # class, group, size (w, d, h), has a support
     ("table", "floor", (1.2, 0.7, 0.75), True), ("chair", "floor", (0.45, 0.5, 0.9), False),
@@ -284,7 +284,7 @@ def test_one_set_of_plan_rules_the_repaired_plan_passes_the_strict_check_and_pla
     accepts, and the placement engine's resolve_plan drops the same objects for the same reasons."""
     from assist3d.contracts import PlacedInstance, Room
     from assist3d.scene.placement.common import resolve_plan
-    from assist3d.scene.relations import review_plan, validate_plan
+    from assist3d.planning.relations import review_plan, validate_plan
 
     recs = tuple(AssetRecord(id=f"a{i}", source="t", name="x", class_name="x", groups=("floor",), size=(1, 1, 1))
                  for i in range(5))

@@ -16,7 +16,7 @@ from assist3d.errors import PlacementError
 from assist3d.scene.geometry import room_polygon, wall_segments
 from assist3d.scene.placement import place_group, place_group_random
 from assist3d.scene.placement.scoring import Candidates, TargetBox, relation_score
-from assist3d.scene.relations import PlanRequest
+from assist3d.planning.relations import PlanRequest
 
 from test_scene_placement_kit import (DOOR, box_asset, footprint, front_dir, l_room, make_catalog, plan, rect_room,
                                       table_asset)

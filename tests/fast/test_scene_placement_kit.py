@@ -11,7 +11,7 @@ import shapely
 from assist3d.assets.catalog import Catalog
 from assist3d.contracts import AssetRecord, MeshData, Opening, PlacedInstance, Relation, Room, SupportSurface
 from assist3d.scene.geometry import rect_corners
-from assist3d.scene.relations import GroupPlan, PlannedObject, PlanRequest
+from assist3d.planning.relations import GroupPlan, PlannedObject, PlanRequest
 
 
 def box_mesh(lo: tuple[float, float, float], hi: tuple[float, float, float], color=(200, 60, 60)) -> MeshData:

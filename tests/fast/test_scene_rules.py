@@ -9,9 +9,9 @@ import pytest
 
 from assist3d.config import GenerateConfig
 from assist3d.contracts import AssetRecord, PlacedInstance, Room
-from assist3d.scene import planners
-from assist3d.scene.relations import PlanRequest, validate_plan
-from assist3d.scene.rules import FLOOR_RULES, ON_TOP_RULES, WALL_RULES, RulePlanner
+from assist3d.planning import planners
+from assist3d.planning.relations import PlanRequest, validate_plan
+from assist3d.planning.rules import FLOOR_RULES, ON_TOP_RULES, WALL_RULES, RulePlanner
 
 ROOM = Room(((0.0, 0.0), (5.0, 0.0), (5.0, 4.0), (0.0, 4.0)), 2.6)
 SIZES = {"table": (1.4, 0.8, 0.75), "dining table": (1.6, 0.9, 0.75), "chair": (0.45, 0.5, 0.9),
@@ -131,7 +131,7 @@ def test_tables_are_data():
 
 def test_make_planner(monkeypatch, caplog):
     monkeypatch.setattr(planners, "_said_rules", False)
-    with caplog.at_level(logging.INFO, logger="assist3d.scene.planners"):
+    with caplog.at_level(logging.INFO, logger="assist3d.planning.planners"):
         p1 = planners.make_planner(GenerateConfig())
         p2 = planners.make_planner(GenerateConfig())
     assert isinstance(p1, RulePlanner) and isinstance(p2, RulePlanner)

@@ -1,7 +1,7 @@
 """The LLM relation planner: one chat completion per group, one repair round, rules as fallback.
 
 ``LLMPlanner(cfg.llm, fallback=RulePlanner(...)).plan(request, rng=rng)`` returns a
-:class:`~assist3d.scene.relations.GroupPlan` that always passes ``validate_plan``:
+:class:`~assist3d.planning.relations.GroupPlan` that always passes ``validate_plan``:
 
 1. The group's prompt template is rendered (vocabulary, numbered objects with sizes, room,
    placed instances, worked example) and sent; the answer is decoded with ``json.loads`` and
@@ -30,7 +30,7 @@ import numpy as np
 from ..config import LLMConfig
 from ..contracts import Relation, Room
 from ..errors import ConfigError, LLMError, inert
-from ..scene.relations import CROSS_GROUP, GroupPlan, PlannedObject, Planner, PlanRequest, validate_plan
+from ..planning.relations import CROSS_GROUP, GroupPlan, PlannedObject, Planner, PlanRequest, validate_plan
 from ..taxonomy.roomtypes import RoomTemplate
 from .cache import ResponseCache
 from .client import ChatAnswer, ChatClient, Usage

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..contracts import PlacedInstance, Room
 from ..errors import ConfigError
-from ..scene.relations import CROSS_GROUP, RELATIONS, PlanRequest, group_kind
+from ..planning.relations import CROSS_GROUP, RELATIONS, PlanRequest, group_kind
 
 TEMPLATE_FILES = {"floor": "floor.txt", "wall": "wall.txt", "on": "on_top.txt", "vlm": "vlm_score.txt",
                   "repair": "repair.txt", "room": "room_objects.txt"}

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..contracts import Relation
-from ..scene.relations import CROSS_GROUP, RELATIONS, PlannedObject, PlanRequest, group_kind
+from ..planning.relations import CROSS_GROUP, RELATIONS, PlannedObject, PlanRequest, group_kind
 
 # Relations that are hard constraints unless the answer says otherwise (the rest are soft unless
 # the answer marks them "hard": true), as in the rule planner.

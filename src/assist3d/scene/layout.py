@@ -35,10 +35,10 @@ from ..errors import AssistError
 from ..records import PLAN_COUNTERS
 from ..rng import make_rng
 from .placement import PlacementResult, place_group, place_group_random
-from .planners import make_planner
-from .relations import GroupPlan, Planner, PlanRequest, review_plan
+from ..planning.planners import make_planner
+from ..planning.relations import GroupPlan, Planner, PlanRequest, review_plan
 from .room import sample_room
-from .rules import RulePlanner
+from ..planning.rules import RulePlanner
 from .selection import Selection, select_objects
 
 log = logging.getLogger(__name__)
@@ -58,7 +58,7 @@ class Placer:
 
 
 def sanitise_plan(plan: GroupPlan, request: PlanRequest) -> tuple[GroupPlan, list[DroppedObject], list[str]]:
-    """The well-formed plan of :func:`~assist3d.scene.relations.review_plan`, the objects it took
+    """The well-formed plan of :func:`~assist3d.planning.relations.review_plan`, the objects it took
     out as dropped objects (with reasons) and the notes describing every repair."""
     review = review_plan(plan, request)
     dropped = [DroppedObject(request.objects[i].id, request.group, reason) for i, reason in review.dropped]
@@ -227,7 +227,7 @@ def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_inde
     """One scene's layout. The same (catalog, cfg, seed, scene_index) gives the same layout
     (timings aside: ``stats["timing"]`` holds wall seconds of the selection as ``"select"``, of
     each group by its name and of LLM calls as ``"llm_seconds"``). ``planner`` defaults to
-    :func:`~assist3d.scene.planners.make_planner`, ``placer`` to the placement engine."""
+    :func:`~assist3d.planning.planners.make_planner`, ``placer`` to the placement engine."""
     t0 = time.perf_counter()
     planner = planner if planner is not None else make_planner(cfg)
     room = sample_room(cfg.room, make_rng(seed, "room"))

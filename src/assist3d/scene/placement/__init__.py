@@ -19,7 +19,7 @@ from ...config import LayoutConfig
 from ...contracts import DroppedObject, PlacedInstance
 from ...errors import PlacementError
 from ..geometry import pose_matrix
-from ..relations import GroupPlan, PlanRequest, group_kind
+from ...planning.relations import GroupPlan, PlanRequest, group_kind
 from .common import Item, relations_for_instance, resolve_plan
 from .floor import FloorProblem
 from .ontop import OnTopProblem

@@ -9,7 +9,7 @@ import numpy as np
 
 from ...contracts import AssetRecord, PlacedInstance, Relation
 from ..geometry import pose_xyz_yaw
-from ..relations import CROSS_GROUP, RELATIONS, GroupPlan, PlanRequest, review_plan
+from ...planning.relations import CROSS_GROUP, RELATIONS, GroupPlan, PlanRequest, review_plan
 from .scoring import SATISFIED, Candidates, TargetBox, relation_score
 from .search import Choice
 
@@ -32,7 +32,7 @@ class Item:
 
 def resolve_plan(request: PlanRequest, plan: GroupPlan) -> tuple[list[Item], list[str]]:
     """Turn a plan into items, repairing what is malformed instead of failing (the rules of
-    :func:`~assist3d.scene.relations.review_plan`): an object whose hard relation cannot be used
+    :func:`~assist3d.planning.relations.review_plan`): an object whose hard relation cannot be used
     becomes an item that is never placed, with that reason. Returns the items and the notes
     describing every repair (none for a plan the layout stage already repaired)."""
     review = review_plan(plan, request)

@@ -1,6 +1,6 @@
 """The rule-based relation planner: class names and sizes turned into ordered relations.
 
-It implements :class:`assist3d.scene.relations.Planner` (``name = "rules"``) and is the offline
+It implements :class:`assist3d.planning.relations.Planner` (``name = "rules"``) and is the offline
 default and the fallback of the LLM planner. All knowledge lives in three data tables below
 (:data:`FLOOR_RULES`, :data:`WALL_RULES`, :data:`ON_TOP_RULES`), keyed by canonical class names
 (see :mod:`assist3d.taxonomy.classes`); a class not found there falls back to its head noun and then
@@ -9,7 +9,7 @@ to size-based defaults.
 Ordering: objects are sorted by ``tier`` (anchors such as beds and tables first, the objects that
 relate to them later) and, within a tier, by footprint area, largest first. Every relation targets
 an object earlier in that order (or a placed instance for ``above``/``on``), so a plan is always
-valid for :func:`~assist3d.scene.relations.validate_plan`.
+valid for :func:`~assist3d.planning.relations.validate_plan`.
 """
 
 from __future__ import annotations
