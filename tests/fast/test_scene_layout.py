@@ -283,7 +283,7 @@ def test_one_set_of_plan_rules_the_repaired_plan_passes_the_strict_check_and_pla
     """review_plan is the only plan checker: what it repairs, validate_plan (the LLM repair loop)
     accepts, and the placement engine's resolve_plan drops the same objects for the same reasons."""
     from assist3d.contracts import PlacedInstance, Room
-    from assist3d.scene.placement.common import resolve_plan
+    from assist3d.placement.common import resolve_plan
     from assist3d.planning.relations import review_plan, validate_plan
 
     recs = tuple(AssetRecord(id=f"a{i}", source="t", name="x", class_name="x", groups=("floor",), size=(1, 1, 1))

@@ -14,8 +14,8 @@ from assist3d.config import LayoutConfig
 from assist3d.contracts import Relation
 from assist3d.errors import PlacementError
 from assist3d.scene.geometry import room_polygon, wall_segments
-from assist3d.scene.placement import place_group, place_group_random
-from assist3d.scene.placement.scoring import Candidates, TargetBox, relation_score
+from assist3d.placement import place_group, place_group_random
+from assist3d.placement.scoring import Candidates, TargetBox, relation_score
 from assist3d.planning.relations import PlanRequest
 
 from test_scene_placement_kit import (DOOR, box_asset, footprint, front_dir, l_room, make_catalog, plan, rect_room,
@@ -281,7 +281,7 @@ def test_surface_map_sees_vertical_faces_standing_on_the_surface():
     import shapely
 
     from assist3d.contracts import MeshData, SupportSurface
-    from assist3d.scene.placement.surface import surface_map
+    from assist3d.placement.surface import surface_map
 
     v = np.array([[-0.5, -0.5, 0.5], [0.5, -0.5, 0.5], [0.5, 0.5, 0.5], [-0.5, 0.5, 0.5],
                   [0.0, -0.5, 0.5], [0.0, 0.5, 0.5], [0.0, 0.5, 0.8], [0.0, -0.5, 0.8]], np.float32)

@@ -9,7 +9,7 @@ import pytest
 from assist3d.config import LayoutConfig
 from assist3d.contracts import PlacedInstance, Relation
 from assist3d.scene.geometry import pose_matrix, wall_segments, world_bounds
-from assist3d.scene.placement import place_group
+from assist3d.placement import place_group
 from assist3d.planning.relations import PlanRequest
 
 from test_scene_placement_kit import (DOOR, WINDOW, box_asset, footprint, front_dir, make_catalog, plan, rect_room,

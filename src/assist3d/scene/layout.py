@@ -32,13 +32,13 @@ from ..assets.catalog import Catalog
 from ..config import GenerateConfig
 from ..contracts import AssetRecord, DroppedObject, PlacedInstance, SceneLayout
 from ..errors import AssistError
-from ..records import PLAN_COUNTERS
-from ..rng import make_rng
-from .placement import PlacementResult, place_group, place_group_random
+from ..placement import PlacementResult, place_group, place_group_random
 from ..planning.planners import make_planner
 from ..planning.relations import GroupPlan, Planner, PlanRequest, review_plan
-from .room import sample_room
 from ..planning.rules import RulePlanner
+from ..records import PLAN_COUNTERS
+from ..rng import make_rng
+from .room import sample_room
 from .selection import Selection, select_objects
 
 log = logging.getLogger(__name__)
@@ -50,7 +50,7 @@ MAX_NOTES = 50
 class Placer:
     """The placement engine a layout uses: ``place`` for planned groups (bounded depth-first search)
     and ``place_random`` for the RandomRooms-style baseline; both take ``(request, [plan,] catalog,
-    *, cfg, rng, next_id)`` and return a :class:`~assist3d.scene.placement.PlacementResult`.
+    *, cfg, rng, next_id)`` and return a :class:`~assist3d.placement.PlacementResult`.
     Tests pass stand-ins to :func:`build_layout`."""
 
     place: Callable[..., PlacementResult] = place_group

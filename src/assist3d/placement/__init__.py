@@ -14,12 +14,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...assets.catalog import Catalog
-from ...config import LayoutConfig
-from ...contracts import DroppedObject, PlacedInstance
-from ...errors import PlacementError
-from ..geometry import pose_matrix
-from ...planning.relations import GroupPlan, PlanRequest, group_kind
+from ..assets.catalog import Catalog
+from ..config import LayoutConfig
+from ..contracts import DroppedObject, PlacedInstance
+from ..errors import PlacementError
+from ..planning.relations import GroupPlan, PlanRequest, group_kind
+from ..scene.geometry import pose_matrix
 from .common import Item, relations_for_instance, resolve_plan
 from .floor import FloorProblem
 from .ontop import OnTopProblem

@@ -20,9 +20,9 @@ import numpy as np
 import shapely
 from scipy import ndimage
 
-from ...config import LayoutConfig
-from ...contracts import Room
-from ..geometry import along_walls, room_polygon, rotated_half_extents, wall_segments
+from ..config import LayoutConfig
+from ..contracts import Room
+from ..scene.geometry import along_walls, room_polygon, rotated_half_extents, wall_segments
 from .common import PRIOR_WEIGHT, Item, RelationState, order_candidates
 from .scoring import Candidates, TargetBox
 from .search import Choice
@@ -135,7 +135,7 @@ class FloorGrid:
 
 
 class FloorProblem:
-    """The floor group as a :class:`~assist3d.scene.placement.search.SearchProblem`."""
+    """The floor group as a :class:`~assist3d.placement.search.SearchProblem`."""
 
     def __init__(self, room: Room, items: list[Item], cfg: LayoutConfig, rng: np.random.Generator,
                  max_branch: int):

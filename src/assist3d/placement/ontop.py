@@ -17,9 +17,9 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from ...config import LayoutConfig
-from ...contracts import MeshData, PlacedInstance, Room, SupportSurface
-from ..geometry import InstanceBoxes, boxes_collide, pose_xyz_yaw, world_bounds
+from ..config import LayoutConfig
+from ..contracts import MeshData, PlacedInstance, Room, SupportSurface
+from ..scene.geometry import InstanceBoxes, boxes_collide, pose_xyz_yaw, world_bounds
 from .common import Item, MovingBoxesMixin, RelationState, order_candidates, target_box
 from .scoring import Candidates
 from .search import Choice
@@ -39,7 +39,7 @@ def _clean_polygon(points: tuple[tuple[float, float], ...]) -> shapely.Polygon:
 
 
 class OnTopProblem(MovingBoxesMixin):
-    """One on-top group as a :class:`~assist3d.scene.placement.search.SearchProblem`."""
+    """One on-top group as a :class:`~assist3d.placement.search.SearchProblem`."""
 
     def __init__(self, room: Room, items: list[Item], support: PlacedInstance,
                  surfaces: tuple[SupportSurface, ...], placed: tuple[PlacedInstance, ...],

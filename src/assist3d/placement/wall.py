@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...config import LayoutConfig
-from ...contracts import PlacedInstance, Room
-from ..geometry import (InstanceBoxes, along_walls, footprints_overlap, rect_corners, rects_in_polygon, room_polygon,
+from ..config import LayoutConfig
+from ..contracts import PlacedInstance, Room
+from ..scene.geometry import (InstanceBoxes, along_walls, footprints_overlap, rect_corners, rects_in_polygon, room_polygon,
                         wall_segments, z_overlap)
 from .common import PRIOR_WEIGHT, Item, MovingBoxesMixin, RelationState, order_candidates, target_box
 from .scoring import Candidates
@@ -29,7 +29,7 @@ EPS = 1e-6
 
 
 class WallProblem(MovingBoxesMixin):
-    """The wall group as a :class:`~assist3d.scene.placement.search.SearchProblem`."""
+    """The wall group as a :class:`~assist3d.placement.search.SearchProblem`."""
 
     def __init__(self, room: Room, items: list[Item], placed: tuple[PlacedInstance, ...],
                  sizes: dict[str, tuple[float, float, float]], cfg: LayoutConfig, rng: np.random.Generator,

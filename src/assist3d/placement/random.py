@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...contracts import AssetRecord, DroppedObject, PlacedInstance, Room
-from ..geometry import InstanceBoxes, obb_overlap, pose_matrix, rect_corners, rects_in_polygon, room_polygon
+from ..contracts import AssetRecord, DroppedObject, PlacedInstance, Room
+from ..scene.geometry import InstanceBoxes, obb_overlap, pose_matrix, rect_corners, rects_in_polygon, room_polygon
 
 TRIES = 64
 

@@ -7,9 +7,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...contracts import AssetRecord, PlacedInstance, Relation
-from ..geometry import pose_xyz_yaw
-from ...planning.relations import CROSS_GROUP, RELATIONS, GroupPlan, PlanRequest, review_plan
+from ..contracts import AssetRecord, PlacedInstance, Relation
+from ..planning.relations import CROSS_GROUP, RELATIONS, GroupPlan, PlanRequest, review_plan
+from ..scene.geometry import pose_xyz_yaw
 from .scoring import SATISFIED, Candidates, TargetBox, relation_score
 from .search import Choice
 
