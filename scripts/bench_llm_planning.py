@@ -25,7 +25,7 @@ import time
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 from assist3d.assets import open_catalog_for
-from assist3d.presets import compose
+from assist3d.config.presets import compose
 from assist3d.scene.layout import build_layout
 
 COUNT = re.compile(r"to (?:arrange|put on it|hang) \((\d+)\)")

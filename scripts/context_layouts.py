@@ -31,7 +31,7 @@ import numpy as np
 
 from assist3d.assets import open_catalog
 from assist3d.metrics.context import context_complexity
-from assist3d.presets import apply_preset
+from assist3d.config.presets import apply_preset
 from assist3d.rng import scene_seed
 from assist3d.scene.layout import build_layout
 

@@ -29,7 +29,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
 
     from assist3d.assets import open_catalog, procedural_library_dir
-    from assist3d.presets import apply_preset
+    from assist3d.config.presets import apply_preset
     from assist3d.rng import scene_seed
     from assist3d.scene.layout import build_layout
 

@@ -21,7 +21,7 @@ from pathlib import Path
 from assist3d.assets import open_catalog
 from assist3d.config import parse_config
 from assist3d.pipeline import generate_dataset
-from assist3d.presets import apply_preset
+from assist3d.config.presets import apply_preset
 from assist3d.scene.layout import build_layout
 from assist3d.testing import SCENE_ARRAYS
 

@@ -24,7 +24,7 @@ HEAVY = {"trimesh", "shapely", "scipy.sparse", "scipy.spatial", "PIL", "embreex"
 LAZY_INTERNAL = {"assist3d.assets.procedural", "assist3d.llm.planner"}
 #: light modules every command needs: a CLI command imports them at module level like anyone else
 CORE = {"assist3d.errors", "assist3d.fileio", "assist3d.contracts", "assist3d.paths", "assist3d.bounds",
-        "assist3d.rng", "assist3d.records", "assist3d.interrupts", "assist3d.config", "assist3d.presets",
+        "assist3d.rng", "assist3d.records", "assist3d.interrupts", "assist3d.config", "assist3d.config.presets",
         "assist3d.registry"}
 
 

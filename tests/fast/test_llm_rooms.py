@@ -13,7 +13,7 @@ import pytest
 from assist3d.assets.catalog import Catalog
 from assist3d.contracts import AssetRecord, MeshData, SupportSurface
 from assist3d.llm.rooms import NO_HOLD, check_room_answer
-from assist3d.presets import apply_preset
+from assist3d.config.presets import apply_preset
 from assist3d.scene.layout import build_layout
 from assist3d.taxonomy.roomtypes import ROOM_TEMPLATES
 from llm_fakeserver import SENTINEL, FakeServer, Step, files_containing

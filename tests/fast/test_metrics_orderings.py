@@ -18,7 +18,7 @@ from assist3d.metrics.context import context_complexity
 from assist3d.metrics.diversity import geometry_diversity
 from assist3d.metrics.plausibility import score_layout
 from assist3d.metrics.report import DatasetSummary, shared_codebook
-from assist3d.presets import apply_preset
+from assist3d.config.presets import apply_preset
 from assist3d.rng import scene_seed
 from assist3d.scene.layout import build_layout
 

@@ -8,7 +8,7 @@ import pytest
 
 from assist3d.config import GenerateConfig
 from assist3d.errors import ConfigError
-from assist3d.presets import HOUSEHOLD_CLASSES, PRESETS, apply_preset, preset_overrides
+from assist3d.config.presets import HOUSEHOLD_CLASSES, PRESETS, apply_preset, preset_overrides
 
 
 @pytest.mark.parametrize("name", sorted(PRESETS))

@@ -196,7 +196,7 @@ def test_randomrooms_mode_uses_random_placement(tmp_path):
         return _fake_random(request, catalog, cfg=cfg, rng=rng, next_id=next_id)
 
     cat = make_catalog(tmp_path / "cat")
-    from assist3d.presets import apply_preset
+    from assist3d.config.presets import apply_preset
 
     cfg = apply_preset({}, "randomrooms")
     lay = build_layout(cat, cfg, 2, placer=layout_mod.Placer(_fake_place, spy_random))
@@ -240,7 +240,7 @@ def test_cli_layout_and_layout_png(tmp_path):
 
 
 def test_cli_config_precedence(tmp_path):
-    from assist3d.presets import compose as compose_config
+    from assist3d.config.presets import compose as compose_config
     from assist3d.errors import ConfigError
 
     f = tmp_path / "c.yaml"
@@ -261,7 +261,7 @@ def test_cli_config_precedence(tmp_path):
 def test_holodeck_style_room_places_repeated_models(tmp_path):
     """The room-type strategy through the real layout stage: a bedroom's bed and its nightstands
     (copies of one model) are placed as distinct instances, the room type is recorded."""
-    from assist3d.presets import apply_preset
+    from assist3d.config.presets import apply_preset
 
     cat = make_catalog(tmp_path / "cat")
     cfg = apply_preset({"selection": {"room_types": ["bedroom"], "assets_per_class": None},

@@ -16,7 +16,7 @@ from rich.table import Table
 
 from ..bounds import MAX_SCENE_INDEX, MAX_SCENES, MAX_SEED, MAX_WORKERS, check_scene_indices
 from ..errors import ConfigError
-from ..presets import compose
+from ..config.presets import compose
 from ..records import STAGES, stage_timings
 
 log = logging.getLogger("assist3d.cli.generate")

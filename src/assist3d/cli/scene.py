@@ -13,7 +13,7 @@ from ..bounds import MAX_SCENE_INDEX, MAX_SEED
 from ..contracts import SceneLayout
 from ..errors import DataError, shown
 from ..fileio import write_json_atomic
-from ..presets import compose
+from ..config.presets import compose
 
 
 def register(app: typer.Typer) -> None:

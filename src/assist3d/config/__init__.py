@@ -14,9 +14,9 @@ from typing import Any, Literal, TypeVar
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from .errors import ConfigError, shown
-from .fileio import write_text_atomic
-from .taxonomy.roomtypes import ROOM_TEMPLATES
+from ..errors import ConfigError, shown
+from ..fileio import write_text_atomic
+from ..taxonomy.roomtypes import ROOM_TEMPLATES
 
 
 class Section(BaseModel):
@@ -327,7 +327,7 @@ def parse_config(data: dict | None, *, source: str = "<dict>") -> GenerateConfig
 
 def read_config_file(path: str | Path) -> dict:
     """The mapping in YAML file ``path``, validated on its own so an error names the file (a
-    preset or flags may still be merged over it: see :func:`assist3d.presets.compose`)."""
+    preset or flags may still be merged over it: see :func:`assist3d.config.presets.compose`)."""
     p = Path(path)
     if not p.is_file():
         raise ConfigError(f"{p}: config file not found")

@@ -9,9 +9,9 @@ from __future__ import annotations
 import difflib
 from pathlib import Path
 
-from .config import GenerateConfig, merge_config, parse_config, read_config_file
-from .errors import ConfigError
-from .taxonomy.roomtypes import template_classes
+from . import GenerateConfig, merge_config, parse_config, read_config_file
+from ..errors import ConfigError
+from ..taxonomy.roomtypes import template_classes
 
 # Every class a Holodeck-style room may hold (the room templates of assist3d.taxonomy.roomtypes).
 # Canonical names (see assist3d.taxonomy.classes): an asset matches when its class or its canonical
