@@ -325,20 +325,26 @@ def parse_config(data: dict | None, *, source: str = "<dict>") -> GenerateConfig
     return validate_config(GenerateConfig, data, source=source)
 
 
-def read_config_file(path: str | Path) -> dict:
-    """The mapping in YAML file ``path``, validated on its own so an error names the file (a
-    preset or flags may still be merged over it: see :func:`assist3d.config.presets.compose`)."""
+def read_yaml_mapping(path: str | Path, *, missing: str = "config file not found") -> dict:
+    """The mapping at the top of YAML file ``path`` (empty file: ``{}``); a :class:`ConfigError`
+    naming the file when it is absent (``missing`` says what to do), not YAML, or not a mapping."""
     p = Path(path)
     if not p.is_file():
-        raise ConfigError(f"{p}: config file not found")
+        raise ConfigError(f"{p}: {missing}")
     try:
         loaded = yaml.safe_load(p.read_text(encoding="utf-8"))
     except yaml.YAMLError as e:
         raise ConfigError(f"{p}: not valid YAML ({e})") from None
     if loaded is not None and not isinstance(loaded, dict):
         raise ConfigError(f"{p}: expected a mapping at the top level, got {type(loaded).__name__}")
-    data = loaded or {}
-    parse_config(data, source=str(p))
+    return loaded or {}
+
+
+def read_config_file(path: str | Path) -> dict:
+    """The mapping in YAML file ``path``, validated on its own so an error names the file (a
+    preset or flags may still be merged over it: see :func:`assist3d.config.presets.compose`)."""
+    data = read_yaml_mapping(path)
+    parse_config(data, source=str(path))
     return data
 
 

@@ -13,7 +13,7 @@ from typing import Literal
 import yaml
 from pydantic import Field
 
-from ..config import Section, validate_config
+from ..config import Section, read_yaml_mapping, validate_config
 from ..errors import ConfigError
 
 
@@ -126,16 +126,9 @@ def parse_train_config(data: dict, source: str = "<dict>") -> TrainConfig:
 
 
 def load_train_config(path: str | Path) -> TrainConfig:
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigError(f"{path}: training config not found (presets: configs/small-cpu.yaml, configs/paper.yaml)")
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as e:
-        raise ConfigError(f"{path}: not valid YAML: {e}") from None
-    if data is not None and not isinstance(data, dict):
-        raise ConfigError(f"{path}: expected a mapping at the top level, got {type(data).__name__}")
-    return parse_train_config(data or {}, str(path))
+    data = read_yaml_mapping(path, missing="training config not found (presets: configs/small-cpu.yaml, "
+                                          "configs/paper.yaml)")
+    return parse_train_config(data, str(path))
 
 
 def dump_train_config(cfg: TrainConfig) -> str:
