@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from assist3d.evaluation import load_predictions, match_scene, save_predictions, summarize
+from assist3d.bench.evaluation import load_predictions, match_scene, save_predictions, summarize
 
 
 def synthetic_scene(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -106,8 +106,8 @@ def main() -> None:
 def end_to_end(args: argparse.Namespace) -> None:
     import shutil
 
-    from assist3d.data import open_dataset
-    from assist3d.evaluation import evaluate_dataset
+    from assist3d.bench.data import open_dataset
+    from assist3d.bench.evaluation import evaluate_dataset
 
     rng = np.random.default_rng(args.seed)
     gt, pred = args.end_to_end / "gt", args.end_to_end / "pred"

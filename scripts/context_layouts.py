@@ -30,9 +30,9 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from assist3d.assets import open_catalog
-from assist3d.metrics.context import context_complexity
+from assist3d.bench.metrics.context import context_complexity
 from assist3d.config.presets import apply_preset
-from assist3d.rng import scene_seed
+from assist3d.core.rng import scene_seed
 from assist3d.scene.layout import build_layout
 
 SPARSE = {"selection": {"floor_count": 12, "wall_count": 4, "on_top_count": 2}}
@@ -51,9 +51,9 @@ def _layout(job: tuple[str | None, str, dict, int]) -> tuple[str, list[tuple[str
 
 
 def _geometry(assets: str | None, presets: list[str], scenes: dict[str, list[list[tuple[str, str]]]]) -> dict:
-    from assist3d.metrics.clusters import asset_features
-    from assist3d.metrics.diversity import geometry_diversity
-    from assist3d.metrics.report import DatasetSummary, shared_codebook
+    from assist3d.bench.metrics.clusters import asset_features
+    from assist3d.bench.metrics.diversity import geometry_diversity
+    from assist3d.bench.metrics.report import DatasetSummary, shared_codebook
 
     ids, feats = asset_features(open_catalog(assets))
     row = {a: i for i, a in enumerate(ids)}

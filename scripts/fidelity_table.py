@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from assist3d.data import open_dataset
-from assist3d.evaluation.runner import evaluate_dataset
+from assist3d.bench.data import open_dataset
+from assist3d.bench.evaluation.runner import evaluate_dataset
 
 KEYS = ("AP", "AP50", "AP25", "AR")
 

@@ -8,7 +8,7 @@
 # Environment:
 #   FIT_SOURCE=generate|toy   generate (default): `assist3d generate --num-scenes 4 --config
 #                             configs/generate-sparse.yaml` (sparsely furnished generated rooms);
-#                             toy: 4 box-room scenes from assist3d.engine.toy (Pointcept layout).
+#                             toy: 4 box-room scenes from assist3d.learn.engine.toy (Pointcept layout).
 #   GEN_CONFIG=FILE           generation config for FIT_SOURCE=generate (default
 #                             configs/generate-sparse.yaml; the paper's density gives 150-250
 #                             instances per room, too many for a 2-core memorisation run).
@@ -31,7 +31,7 @@ start=$(date +%s)
 
 case "$SOURCE" in
   toy)
-    "$PY" -c "from assist3d.engine.toy import write_toy_dataset; \
+    "$PY" -c "from assist3d.learn.engine.toy import write_toy_dataset; \
 write_toy_dataset('$WORK/scenes', 4, seed=1, num_objects=6, room_m=4.0, density_per_m2=1000)"
     SPEC="synthetic=pointcept:$WORK/scenes"
     GT="pointcept:$WORK/scenes"

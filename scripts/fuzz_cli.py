@@ -401,7 +401,7 @@ def build_fixtures(root: Path) -> Fixtures:
     scan = gt / "scan.npy"
     np.save(scan, scan_arr)
     preds = root / "preds"
-    from assist3d.evaluation.predictions import save_predictions
+    from assist3d.bench.evaluation.predictions import save_predictions
 
     ids = np.unique(inst[inst >= 0])
     save_predictions(preds / "scan.npz", np.stack([inst == i for i in ids]), np.linspace(1, 0.5, len(ids)).astype(np.float32))
@@ -426,12 +426,12 @@ def build_fixtures(root: Path) -> Fixtures:
 def _checkpoints(root: Path) -> tuple[Path, Path]:
     import torch
 
-    from assist3d.engine.config import parse_train_config
-    from assist3d.engine.toy import make_toy_scene
-    from assist3d.engine.train import MemorySource, train
-    from assist3d.segmenter.checkpoint import save_segmenter
-    from assist3d.segmenter.config import parse_segmenter_config
-    from assist3d.segmenter.model import Segmenter
+    from assist3d.learn.engine.config import parse_train_config
+    from assist3d.learn.engine.toy import make_toy_scene
+    from assist3d.learn.engine.train import MemorySource, train
+    from assist3d.learn.segmenter.checkpoint import save_segmenter
+    from assist3d.learn.segmenter.config import parse_segmenter_config
+    from assist3d.learn.segmenter.model import Segmenter
 
     torch.set_num_threads(1)
     scenes = [make_toy_scene(f"s{i}", rng=np.random.default_rng(i), num_objects=3, room_m=3.0, density_per_m2=150)
@@ -1267,7 +1267,7 @@ ALL_GROUPS = (generate_cases, layout_cases, show_cases, bench_cases, assets_case
 
 
 def _cell(text: str, limit: int = 110) -> str:
-    from assist3d.errors import shown
+    from assist3d.core.errors import shown
 
     return shown(text, limit).replace("|", "\\|")
 
@@ -1349,7 +1349,7 @@ def main(argv: list[str] | None = None) -> int:
             shutil.rmtree(root, ignore_errors=True)
     counts = summary(outcomes)
     stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    from assist3d.bounds import gib, machine_memory_bytes
+    from assist3d.core.bounds import gib, machine_memory_bytes
 
     memory = machine_memory_bytes()
     machine = (f"{platform.system()} {platform.release()}, {os.cpu_count()} CPUs, "

@@ -20,12 +20,12 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from assist3d.data import open_dataset
-from assist3d.evaluation.ap import match_scene, summarize
-from assist3d.segmenter.checkpoint import load_segmenter
-from assist3d.segmenter.cluster import radius_components
-from assist3d.segmenter.features import voxel_features, voxelize
-from assist3d.segmenter.infer import predict_voxels
+from assist3d.bench.data import open_dataset
+from assist3d.bench.evaluation.ap import match_scene, summarize
+from assist3d.learn.segmenter.checkpoint import load_segmenter
+from assist3d.learn.segmenter.cluster import radius_components
+from assist3d.learn.segmenter.features import voxel_features, voxelize
+from assist3d.learn.segmenter.infer import predict_voxels
 
 TTA = [(k, m) for m in (False, True) for k in range(4)]  # (quarter turns about z, mirror x)
 

@@ -30,7 +30,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from assist3d.assets import open_catalog, procedural_library_dir
     from assist3d.config.presets import apply_preset
-    from assist3d.rng import scene_seed
+    from assist3d.core.rng import scene_seed
     from assist3d.scene.layout import build_layout
 
     cfg = apply_preset({}, args.preset)

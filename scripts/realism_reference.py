@@ -4,7 +4,7 @@
     python scripts/realism_reference.py array:../shared/data/real/dev --loro [--json]
     python scripts/realism_reference.py array:../shared/data/real/dev --score assist3d:DATA/a assist3d:DATA/b [--max-scenes 50]
 
-``--out`` writes the quantiles of every statistic of ``assist3d.metrics.realism`` over the given
+``--out`` writes the quantiles of every statistic of ``assist3d.bench.metrics.realism`` over the given
 scans (derived statistics only: no point of a scan is stored). ``--loro`` scores each room against a
 reference built from the other rooms (rescans of a room share the first 9 characters of their
 name, as in ScanNet), which is how a real scan's score should be read: a scan scored against a
@@ -18,9 +18,9 @@ import argparse
 import json
 from pathlib import Path
 
-from assist3d.data import open_dataset
-from assist3d.fileio import write_json_atomic
-from assist3d.metrics.realism import RealismReference, RealismStats, realism_score, scene_stats, stats_of_dataset
+from assist3d.bench.data import open_dataset
+from assist3d.core.fileio import write_json_atomic
+from assist3d.bench.metrics.realism import RealismReference, RealismStats, realism_score, scene_stats, stats_of_dataset
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -11,8 +11,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from assist3d.segmenter.checkpoint import load_segmenter, save_segmenter
-from assist3d.segmenter.shipped import SHIPPED_NAME
+from assist3d.learn.segmenter.checkpoint import load_segmenter, save_segmenter
+from assist3d.learn.segmenter.shipped import SHIPPED_NAME
 
 LIMIT = 5 * 1024 * 1024
 

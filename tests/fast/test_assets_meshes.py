@@ -14,7 +14,7 @@ from assist3d.assets.catalog import Catalog
 from assist3d.assets.meshes import import_meshes
 from assist3d.assets.normalize import (axes_rotation, extract_supports, face_colors_of, normalize_loaded,
                                        to_canonical, validate_mesh)
-from assist3d.contracts import MeshData
+from assist3d.core.contracts import MeshData
 
 
 def _mesh(tm: trimesh.Trimesh) -> MeshData:
@@ -179,7 +179,7 @@ def test_import_meshes_csv_manifest_and_unreadable_manifest(tmp_path, mesh_folde
     report = import_meshes(cat, mesh_folder, manifest, workers=1, collection="mine")
     assert [r.id for r in cat.records] == ["meshes:mine/box.glb"]
     assert len(report.skipped) == 1 and "m.csv:row 3" in report.skipped[0].path and "axis" in report.skipped[0].reason
-    from assist3d.errors import AssetError
+    from assist3d.core.errors import AssetError
 
     (tmp_path / "bad.json").write_text("{not json")
     with pytest.raises(AssetError, match="bad.json"):

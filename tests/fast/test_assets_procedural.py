@@ -15,8 +15,8 @@ from assist3d.assets.catalog import Catalog
 from assist3d.assets.procedural import (ATTRIBUTION, FAMILIES, GROUP_WEIGHTS, LICENSE, SOURCE, build_asset,
                                         build_family, build_library, family_names, family_of)
 from assist3d.assets.procedural._build import SCREEN
-from assist3d.contracts import GROUPS, AssetRecord, MeshData
-from assist3d.errors import AssetError
+from assist3d.core.contracts import GROUPS, AssetRecord, MeshData
+from assist3d.core.errors import AssetError
 
 NAMES = sorted(FAMILIES)
 SEEDS = (0, 7)

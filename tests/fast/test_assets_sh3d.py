@@ -14,7 +14,7 @@ from assist3d.assets.catalog import Catalog
 from assist3d.assets.naming import assign_groups, class_from_name
 from assist3d.assets.properties import parse_properties
 from assist3d.assets.sh3d import SH3D_JAR, convert_entry, import_sh3d, read_catalog
-from assist3d.contracts import AssetRecord, SkippedAsset
+from assist3d.core.contracts import AssetRecord, SkippedAsset
 
 # ------------------------------------------------------------------------------------ helpers
 

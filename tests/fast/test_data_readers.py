@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from assist3d.data import open_dataset, parse_spec
-from assist3d.data.ply import read_ply, write_ply
-from assist3d.errors import ConfigError, DataError
+from assist3d.bench.data import open_dataset, parse_spec
+from assist3d.bench.data.ply import read_ply, write_ply
+from assist3d.core.errors import ConfigError, DataError
 
 # A 4 x 2 grid of vertices on the z = 0 plane, two triangles per cell.
 GRID = np.array([[x, y, 0.0] for y in range(2) for x in range(4)], np.float32)
@@ -173,7 +173,7 @@ def test_s3dis_reader_tolerates_the_corrupt_line(tmp_path):
     ds = open_dataset(f"s3dis:{tmp_path}")
     assert ds.scene_ids == ["Area_5_hallway_6"]
     handler = _Collect()
-    logger = logging.getLogger("assist3d.data.s3dis")
+    logger = logging.getLogger("assist3d.bench.data.s3dis")
     logger.addHandler(handler)
     try:
         s = ds[0]
@@ -298,7 +298,7 @@ def test_s3dis_cache_returns_the_same_room_and_tracks_edits(tmp_path):
     anno = _s3dis_room(tmp_path)
     ds = open_dataset(f"s3dis:{tmp_path}?cache=1")
     first = ds[0]
-    from assist3d.paths import cache_root
+    from assist3d.core.paths import cache_root
 
     assert len(list((cache_root() / "s3dis").glob("Area_5_hallway_6-*.npz"))) == 1
     again = ds[0]  # from the cache

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from assist3d.evaluation import ALL_THRESHOLDS, THRESHOLDS, average_precision, evaluate_scene, match_scene, summarize
+from assist3d.bench.evaluation import ALL_THRESHOLDS, THRESHOLDS, average_precision, evaluate_scene, match_scene, summarize
 
 N = 650
 A = np.arange(0, 200)
@@ -165,7 +165,7 @@ def test_average_precision_direct():
 
 
 def test_bad_shapes_raise():
-    from assist3d.errors import DataError
+    from assist3d.core.errors import DataError
 
     with pytest.raises(DataError, match="points per mask"):
         evaluate_scene(scene(), np.zeros((1, N - 1), bool), np.ones(1, np.float32))

@@ -9,9 +9,9 @@ import pytest
 from typer.testing import CliRunner
 
 from assist3d.cli import app
-from assist3d.data import open_dataset
-from assist3d.errors import DataError
-from assist3d.evaluation import (
+from assist3d.bench.data import open_dataset
+from assist3d.core.errors import DataError
+from assist3d.bench.evaluation import (
     convert_predictions,
     evaluate_dataset,
     export_scannet_txt,

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from assist3d.evaluation import ALL_THRESHOLDS, match_scene, summarize
+from assist3d.bench.evaluation import ALL_THRESHOLDS, match_scene, summarize
 
 MIN = 100
 

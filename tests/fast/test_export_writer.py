@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from assist3d.contracts import PointSample, Room, SceneLayout
-from assist3d.errors import DataError
+from assist3d.core.contracts import PointSample, Room, SceneLayout
+from assist3d.core.errors import DataError
 from assist3d.export import Manifest, load_scene_arrays, read_scene_meta, write_scene
 from assist3d.export.ply import instance_colors
 

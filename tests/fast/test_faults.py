@@ -22,12 +22,12 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
-from assist3d.bounds import MAX_SCENES, check_render_memory, check_scene_indices, render_memory_bytes
+from assist3d.core.bounds import MAX_SCENES, check_render_memory, check_scene_indices, render_memory_bytes
 from assist3d.cli import app
 from assist3d.config import parse_config
-from assist3d.errors import ConfigError, DataError, FaultError, describe_os_error
+from assist3d.core.errors import ConfigError, DataError, FaultError, describe_os_error
 from assist3d.export import read_scene_meta
-from assist3d.fileio import atomic_path, write_bytes_atomic
+from assist3d.core.fileio import atomic_path, write_bytes_atomic
 from assist3d.pipeline import generate_dataset, scene_name
 from assist3d.testing import dataset_digest
 from test_generate_pipeline import TINY
@@ -326,7 +326,7 @@ def test_render_memory_estimate_refuses_before_work_and_passes_the_paper_setting
 
 
 def test_generate_refuses_an_infeasible_render_before_any_scene(tmp_path, monkeypatch):
-    from assist3d import bounds
+    from assist3d.core import bounds
 
     monkeypatch.setattr(bounds, "machine_memory_bytes", lambda: 1.0 * GIB)
     cfg = parse_config({**TINY, "render": {**TINY["render"], "width": 8000, "height": 8000}})
@@ -355,8 +355,8 @@ def test_scene_counts_indices_and_command_line_numbers_are_bounded(tmp_path):
 
 
 def test_engine_voxel_grid_overflow_is_a_data_error_and_training_numbers_are_bounded():
-    from assist3d.engine.config import parse_train_config
-    from assist3d.engine.voxelize import voxelize
+    from assist3d.learn.engine.config import parse_train_config
+    from assist3d.learn.engine.voxelize import voxelize
 
     coord = np.array([[0.0, 0.0, 0.0], [500.0, 0.0, 0.0]], np.float32)
     with pytest.raises(DataError, match="spans .* voxels of 0.01 m"):
@@ -372,7 +372,7 @@ def test_engine_voxel_grid_overflow_is_a_data_error_and_training_numbers_are_bou
 
 
 def test_truncated_prediction_npz_is_a_data_error(tmp_path):
-    from assist3d.evaluation.predictions import load_predictions, save_predictions
+    from assist3d.bench.evaluation.predictions import load_predictions, save_predictions
 
     p = save_predictions(tmp_path / "a.npz", np.ones((2, 10), bool), np.ones(2, np.float32))
     p.write_bytes(p.read_bytes()[:100])

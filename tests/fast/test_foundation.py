@@ -7,10 +7,10 @@ import pytest
 
 from assist3d.assets.catalog import Catalog
 from assist3d.config import load_config, parse_config
-from assist3d.contracts import AssetRecord, MeshData, PlacedInstance, SceneLayout, Room, SupportSurface
-from assist3d.errors import AssetError, ConfigError
-from assist3d.fileio import write_json_atomic
-from assist3d.rng import make_rng, scene_seed
+from assist3d.core.contracts import AssetRecord, MeshData, PlacedInstance, SceneLayout, Room, SupportSurface
+from assist3d.core.errors import AssetError, ConfigError
+from assist3d.core.fileio import write_json_atomic
+from assist3d.core.rng import make_rng, scene_seed
 
 
 def test_config_defaults_are_paper_settings():
@@ -35,8 +35,8 @@ def test_every_config_schema_shares_one_base(schema):
     from pydantic import ValidationError
 
     from assist3d.config import Section
-    from assist3d.engine.config import parse_train_config
-    from assist3d.segmenter.config import parse_segmenter_config
+    from assist3d.learn.engine.config import parse_train_config
+    from assist3d.learn.segmenter.config import parse_segmenter_config
 
     parse, typo, fix, nan = {
         "generate": (parse_config, {"selection": {"flor_count": 3}}, "floor_count", {"room": {"height_min": float("nan")}}),

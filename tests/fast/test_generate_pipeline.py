@@ -20,7 +20,7 @@ from assist3d.cli import app
 from assist3d.config import parse_config
 from assist3d.export import read_scene_meta
 from assist3d.pipeline import generate_dataset, run_benchmark, scene_name
-from assist3d.rng import scene_seed
+from assist3d.core.rng import scene_seed
 
 TINY = {
     "seed": 11,
@@ -121,7 +121,7 @@ def test_resume_skips_complete_scenes_and_redoes_broken_ones(full_run, tmp_path)
 
 def test_other_settings_in_the_same_folder_are_refused(full_run):
     out, _ = full_run
-    from assist3d.errors import DataError
+    from assist3d.core.errors import DataError
 
     with pytest.raises(DataError, match="different settings"):
         generate_dataset(parse_config({**TINY, "render": {**TINY["render"], "voxel_size": 0.05}}), out, range(3))
@@ -177,7 +177,7 @@ def test_generate_show_and_bench_commands(full_run, tmp_path):
 def test_a_second_writer_on_the_same_folder_is_refused(full_run):
     import fcntl
 
-    from assist3d.errors import DataError
+    from assist3d.core.errors import DataError
 
     out, _ = full_run
     with open(out / ".generate.lock", "a+b") as f:
@@ -190,7 +190,7 @@ def test_a_second_writer_on_the_same_folder_is_refused(full_run):
 
 def test_a_failing_scene_is_reported_and_retried_by_the_next_run(full_run, tmp_path, monkeypatch):
     import assist3d.pipeline as pipeline_mod
-    from assist3d.errors import PlacementError
+    from assist3d.core.errors import PlacementError
 
     real = pipeline_mod.build_layout
 

@@ -17,7 +17,7 @@ import yaml
 
 from assist3d.config import parse_config
 from assist3d.export import read_scene_meta
-from assist3d.interrupts import Interrupted, worker_pool
+from assist3d.core.interrupts import Interrupted, worker_pool
 from assist3d.pipeline import generate_dataset, scene_name
 from assist3d.testing import dataset_digest, descendants, wait_until_gone
 
@@ -168,7 +168,7 @@ def test_the_worker_pool_stops_its_workers_on_an_interrupt():
 
 
 def test_the_lock_file_goes_with_the_run_and_a_second_writer_is_refused(tmp_path):
-    from assist3d.errors import DataError
+    from assist3d.core.errors import DataError
     from assist3d.pipeline import _folder_lock
 
     with _folder_lock(tmp_path):

@@ -9,7 +9,7 @@ import time
 import pytest
 
 from assist3d.config import LLMConfig
-from assist3d.errors import ConfigError, LLMError
+from assist3d.core.errors import ConfigError, LLMError
 from assist3d.llm.cache import ResponseCache, cache_key
 from assist3d.llm.client import ChatClient, Usage, parse_endpoint
 from assist3d.llm.prompts import load_template, render_plan_messages

@@ -12,7 +12,7 @@ import pytest
 
 from assist3d.assets.catalog import Catalog
 from assist3d.config import GenerateConfig
-from assist3d.contracts import AssetRecord, MeshData, SupportSurface
+from assist3d.core.contracts import AssetRecord, MeshData, SupportSurface
 from llm_fakeserver import SENTINEL, FakeServer, Step, files_containing
 
 layout_mod = pytest.importorskip("assist3d.scene.layout")

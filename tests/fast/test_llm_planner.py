@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from assist3d.config import LLMConfig
-from assist3d.contracts import AssetRecord, Opening, PlacedInstance, Relation, Room
+from assist3d.core.contracts import AssetRecord, Opening, PlacedInstance, Relation, Room
 from assist3d.llm.planner import LLMPlanner
 from assist3d.planning.relations import GroupPlan, PlannedObject, PlanRequest, group_kind, validate_plan
 from llm_fakeserver import SENTINEL, FakeServer, Step, files_containing

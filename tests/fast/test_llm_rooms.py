@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from assist3d.assets.catalog import Catalog
-from assist3d.contracts import AssetRecord, MeshData, SupportSurface
+from assist3d.core.contracts import AssetRecord, MeshData, SupportSurface
 from assist3d.llm.rooms import NO_HOLD, check_room_answer
 from assist3d.config.presets import apply_preset
 from assist3d.scene.layout import build_layout
-from assist3d.taxonomy.roomtypes import ROOM_TEMPLATES
+from assist3d.core.taxonomy.roomtypes import ROOM_TEMPLATES
 from llm_fakeserver import SENTINEL, FakeServer, Step, files_containing
 
 MODEL = "fake-rooms"

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from assist3d.config import LLMConfig
-from assist3d.contracts import SceneMesh
-from assist3d.errors import DataError
+from assist3d.core.contracts import SceneMesh
+from assist3d.core.errors import DataError
 from assist3d.llm.views import encode_png, render_point_views, render_views
 from assist3d.llm.vlm import score_layout, vlm_layout_score
 from llm_fakeserver import SENTINEL, FakeServer, Step, files_containing
@@ -153,7 +153,7 @@ def test_vlm_layout_score_of_a_scene_folder(secret_env, tmp_path):
     with FakeServer([Step(GOOD)]) as srv:
         assert vlm_layout_score(scene, _cfg(srv, tmp_path), n_views=2, size=32) == 72.0
     assert len([p for p in srv.requests[0]["json"]["messages"][-1]["content"] if p["type"] == "image_url"]) == 2
-    from assist3d.contracts import Room
+    from assist3d.core.contracts import Room
 
     room = Room(((0.0, 0.0), (4.0, 0.0), (4.0, 3.0), (0.0, 3.0)), 2.6)
     (scene / "layout.json").write_text(json.dumps({"room": room.to_json()}))

@@ -10,11 +10,11 @@ import pytest
 import trimesh
 
 from assist3d.assets.catalog import Catalog
-from assist3d.contracts import AssetRecord, MeshData, Opening, PlacedInstance, Room, SceneLayout, SupportSurface
-from assist3d.metrics.context import context_complexity, per_class_max_cooccurrence
-from assist3d.metrics.diversity import code_entropy, fit_codebook, geometry_diversity
-from assist3d.metrics.features import FEATURE_DIM, instance_descriptors, shape_descriptor
-from assist3d.metrics.plausibility import score_layout
+from assist3d.core.contracts import AssetRecord, MeshData, Opening, PlacedInstance, Room, SceneLayout, SupportSurface
+from assist3d.bench.metrics.context import context_complexity, per_class_max_cooccurrence
+from assist3d.bench.metrics.diversity import code_entropy, fit_codebook, geometry_diversity
+from assist3d.bench.metrics.features import FEATURE_DIM, instance_descriptors, shape_descriptor
+from assist3d.bench.metrics.plausibility import score_layout
 
 
 def test_context_complexity_hand_computed():
@@ -148,7 +148,7 @@ def test_blocked_room_is_unreachable(catalog):
 def test_asset_feature_cache_is_reused(catalog, monkeypatch):
     """The second call reads <catalog>/features.npz instead of describing meshes again (it used to
     fail on its own cache: the seed came back as shape (1,))."""
-    from assist3d.metrics import clusters
+    from assist3d.bench.metrics import clusters
 
     ids, feats = clusters.asset_features(catalog)
     assert sorted(ids) == ["cabinet", "cup", "picture", "table"] and feats.shape == (4, FEATURE_DIM)

@@ -13,13 +13,13 @@ import pytest
 from assist3d.assets.catalog import Catalog
 from assist3d.assets.procedural import build_library
 from assist3d.assets.sh3d import import_sh3d
-from assist3d.metrics.clusters import asset_features
-from assist3d.metrics.context import context_complexity
-from assist3d.metrics.diversity import geometry_diversity
-from assist3d.metrics.plausibility import score_layout
-from assist3d.metrics.report import DatasetSummary, shared_codebook
+from assist3d.bench.metrics.clusters import asset_features
+from assist3d.bench.metrics.context import context_complexity
+from assist3d.bench.metrics.diversity import geometry_diversity
+from assist3d.bench.metrics.plausibility import score_layout
+from assist3d.bench.metrics.report import DatasetSummary, shared_codebook
 from assist3d.config.presets import apply_preset
-from assist3d.rng import scene_seed
+from assist3d.core.rng import scene_seed
 from assist3d.scene.layout import build_layout
 
 PRESETS = ("assist3d", "randomrooms", "holodeck-style", "no-context")

@@ -10,8 +10,8 @@ import pytest
 import trimesh
 
 from assist3d.assets.catalog import Catalog
-from assist3d.contracts import AssetRecord, MeshData, Opening, PlacedInstance, Room, SceneLayout, SupportSurface
-from assist3d.metrics.plausibility import score_layout
+from assist3d.core.contracts import AssetRecord, MeshData, Opening, PlacedInstance, Room, SceneLayout, SupportSurface
+from assist3d.bench.metrics.plausibility import score_layout
 
 
 def _mesh(size) -> MeshData:

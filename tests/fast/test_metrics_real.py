@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from assist3d.metrics.report import metrics_table, shared_codebook, summarize_dataset
+from assist3d.bench.metrics.report import metrics_table, shared_codebook, summarize_dataset
 
 
 def test_metrics_on_real_scan(real_scan_path):

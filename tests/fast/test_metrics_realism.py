@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from assist3d.errors import DataError
-from assist3d.metrics.realism import (STATS, RealismReference, RealismStats, _ks_to_quantiles, realism_score,
+from assist3d.core.errors import DataError
+from assist3d.bench.metrics.realism import (STATS, RealismReference, RealismStats, _ks_to_quantiles, realism_score,
                                       scene_stats)
 
 

@@ -10,9 +10,9 @@ import numpy as np
 import trimesh
 
 from assist3d.assets.catalog import Catalog
-from assist3d.contracts import AssetRecord, MeshData, PlacedInstance, Room, SceneLayout
-from assist3d.metrics.plausibility import score_layout
-from assist3d.metrics.report import metrics_table, shared_codebook, summarize_dataset
+from assist3d.core.contracts import AssetRecord, MeshData, PlacedInstance, Room, SceneLayout
+from assist3d.bench.metrics.plausibility import score_layout
+from assist3d.bench.metrics.report import metrics_table, shared_codebook, summarize_dataset
 
 
 def _pose(x, y, z=0.0):
@@ -104,7 +104,7 @@ def test_metrics_cli_json_keys_are_the_datasets_as_given(tmp_path, monkeypatch):
 
 
 def test_plot_labels_are_short_when_unambiguous():
-    from assist3d.metrics.report import short_labels
+    from assist3d.bench.metrics.report import short_labels
 
     assert short_labels(["/tmp/cmp/assist3d", "assist3d:/tmp/cmp/randomrooms"]) == ["assist3d", "randomrooms"]
     # two folders of the same name in different comparisons keep their full names

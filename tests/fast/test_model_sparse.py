@@ -7,8 +7,8 @@ import pytest
 torch = pytest.importorskip("torch")
 import torch.nn.functional as F  # noqa: E402
 
-from assist3d.models import sparse as sp  # noqa: E402
-from assist3d.models import spconv_backend  # noqa: E402
+from assist3d.learn.models import sparse as sp  # noqa: E402
+from assist3d.learn.models import spconv_backend  # noqa: E402
 
 BACKENDS = ["torch", pytest.param("spconv", marks=pytest.mark.skipif(not spconv_backend.available(),
                                                                      reason="spconv not installed"))]

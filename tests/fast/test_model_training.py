@@ -9,14 +9,14 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
-from assist3d.engine.config import LossConfig, parse_data_arg, parse_train_config  # noqa: E402
-from assist3d.engine.losses import layer_loss, scene_loss  # noqa: E402
-from assist3d.engine.matcher import hungarian_match, match_cost  # noqa: E402
-from assist3d.engine.predict import dbscan_labels, predict_scene  # noqa: E402
-from assist3d.engine.toy import make_toy_scene  # noqa: E402
-from assist3d.engine.train import MemorySource, Trainer, load_checkpoint, save_checkpoint, train  # noqa: E402
-from assist3d.engine.voxelize import majority_label, voxelize  # noqa: E402
-from assist3d.models.decoder import LayerPrediction  # noqa: E402
+from assist3d.learn.engine.config import LossConfig, parse_data_arg, parse_train_config  # noqa: E402
+from assist3d.learn.engine.losses import layer_loss, scene_loss  # noqa: E402
+from assist3d.learn.engine.matcher import hungarian_match, match_cost  # noqa: E402
+from assist3d.learn.engine.predict import dbscan_labels, predict_scene  # noqa: E402
+from assist3d.learn.engine.toy import make_toy_scene  # noqa: E402
+from assist3d.learn.engine.train import MemorySource, Trainer, load_checkpoint, save_checkpoint, train  # noqa: E402
+from assist3d.learn.engine.voxelize import majority_label, voxelize  # noqa: E402
+from assist3d.learn.models.decoder import LayerPrediction  # noqa: E402
 
 TINY = {
     "threads": 1,
@@ -182,7 +182,7 @@ def test_dbscan_splits_far_clusters():
 
 
 def test_model_bench_reports_times(tmp_path):
-    from assist3d.engine.bench import run_model_bench
+    from assist3d.learn.engine.bench import run_model_bench
 
     res = run_model_bench(parse_train_config(TINY), points=3000, repeats=1)
     assert res.points == 3000 and 0 < res.voxels <= 3000
@@ -193,7 +193,7 @@ def test_import_assist3d_does_not_import_torch():
     import subprocess
     import sys
 
-    code = "import sys, assist3d, assist3d.cli, assist3d.engine, assist3d.models; print('torch' in sys.modules)"
+    code = "import sys, assist3d, assist3d.cli, assist3d.learn.engine, assist3d.learn.models; print('torch' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
 
@@ -213,7 +213,7 @@ def test_predict_cli_writes_evaluation_format(tmp_path):
     from typer.testing import CliRunner
 
     from assist3d.cli import app
-    from assist3d.engine.toy import write_pointcept_scene
+    from assist3d.learn.engine.toy import write_pointcept_scene
 
     scenes = _scenes(2)
     for s in scenes:
@@ -232,8 +232,8 @@ def test_predict_cli_writes_evaluation_format(tmp_path):
 
 def test_mixed_precision_forward_backward():
     """bf16 autocast (the CUDA AMP path, exercised here on the CPU) runs and keeps float32 gradients."""
-    from assist3d.engine.train import build_model
-    from assist3d.engine.voxelize import collate, instance_masks
+    from assist3d.learn.engine.train import build_model
+    from assist3d.learn.engine.voxelize import collate, instance_masks
 
     cfg = parse_train_config(TINY)
     torch.manual_seed(0)
@@ -253,7 +253,7 @@ def test_mixed_precision_forward_backward():
 def test_presets_load_and_paper_defaults():
     from pathlib import Path
 
-    from assist3d.engine.config import TrainConfig, load_train_config
+    from assist3d.learn.engine.config import TrainConfig, load_train_config
 
     configs = Path(__file__).resolve().parents[2] / "configs"
     paper = load_train_config(configs / "paper.yaml")
@@ -287,7 +287,7 @@ def test_custom_loggers_get_every_step_and_replace_the_default_files(tmp_path):
 
 
 def test_csv_log_truncates_by_its_step_column(tmp_path):
-    from assist3d.engine.loggers import CsvLog
+    from assist3d.learn.engine.loggers import CsvLog
 
     log = CsvLog(tmp_path / "m.csv", ("epoch", "step", "loss"))
     log.log([{"epoch": 1, "step": s, "loss": 0.5} for s in (1, 2, 3)])
@@ -299,7 +299,7 @@ def test_csv_log_truncates_by_its_step_column(tmp_path):
 
 
 def test_loader_workers_prepare_the_same_batches_in_order():
-    from assist3d.engine.loader import epoch_batches
+    from assist3d.learn.engine.loader import epoch_batches
 
     cfg = parse_train_config({**TINY, "augment": {"enabled": True}, "data": {"voxel_size": 0.1, "max_points": 2000}})
     src = MemorySource(_scenes(3))

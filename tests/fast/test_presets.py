@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from assist3d.config import GenerateConfig
-from assist3d.errors import ConfigError
+from assist3d.core.errors import ConfigError
 from assist3d.config.presets import HOUSEHOLD_CLASSES, PRESETS, apply_preset, preset_overrides
 
 
@@ -62,8 +62,8 @@ def test_room_template_classes_exist_in_their_groups_of_the_procedural_library()
     wall item a wall class and each small object an on-top class; else the Holodeck-style baseline
     would silently lose that object on the built-in library."""
     from assist3d.assets.procedural import FAMILIES, asset_groups, build_family
-    from assist3d.taxonomy.classes import canonical_class, normalise_class
-    from assist3d.taxonomy.roomtypes import ROOM_TEMPLATES
+    from assist3d.core.taxonomy.classes import canonical_class, normalise_class
+    from assist3d.core.taxonomy.roomtypes import ROOM_TEMPLATES
 
     keys: dict[str, set[str]] = {"floor": set(), "wall": set(), "obj": set()}
     for name, fam in FAMILIES.items():

@@ -2,7 +2,7 @@
 
 Arrays of any shape, dtype and values go through the ``array`` reader and the ``segment`` command's
 point reader; random overrides go through the configuration loaders. Any exception other than an
-:class:`~assist3d.errors.AssistError` (or, where documented, pydantic's ``ValidationError``) fails
+:class:`~assist3d.core.errors.AssistError` (or, where documented, pydantic's ``ValidationError``) fails
 the test. Settings are small and derandomized so CI runs the same examples in a few seconds.
 """
 
@@ -20,10 +20,10 @@ from hypothesis import strategies as st
 from pydantic import BaseModel, ValidationError
 
 from assist3d.config import GenerateConfig, load_config, parse_config
-from assist3d.data import open_dataset
-from assist3d.engine.config import TrainConfig, load_train_config, parse_train_config
-from assist3d.errors import AssistError, ConfigError
-from assist3d.segmenter.config import SegmenterConfig, parse_segmenter_config
+from assist3d.bench.data import open_dataset
+from assist3d.learn.engine.config import TrainConfig, load_train_config, parse_train_config
+from assist3d.core.errors import AssistError, ConfigError
+from assist3d.learn.segmenter.config import SegmenterConfig, parse_segmenter_config
 
 SETTINGS = settings(max_examples=80, deadline=None, derandomize=True, database=None, print_blob=True,
                     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])

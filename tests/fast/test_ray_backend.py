@@ -17,7 +17,7 @@ import pytest
 import yaml
 
 from assist3d.config import parse_config
-from assist3d.errors import ConfigError
+from assist3d.core.errors import ConfigError
 from assist3d.export import read_scene_meta
 from assist3d.pipeline import generate_dataset, scene_name
 from assist3d.testing import dataset_digest

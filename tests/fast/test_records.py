@@ -1,9 +1,9 @@
-"""Typed run records (assist3d.records): the one place that names the keys of a scene's marker."""
+"""Typed run records (assist3d.core.records): the one place that names the keys of a scene's marker."""
 
 from __future__ import annotations
 
 from assist3d.export.manifest import scene_entry
-from assist3d.records import (MANIFEST_ENTRY_KEYS, PLAN_COUNTERS, STAGES, LLMUsage, SceneRecord, StageTimings,
+from assist3d.core.records import (MANIFEST_ENTRY_KEYS, PLAN_COUNTERS, STAGES, LLMUsage, SceneRecord, StageTimings,
                               stage_timings)
 
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from assist3d.config import RenderConfig
-from assist3d.contracts import Camera, Room
-from assist3d.errors import RenderError
+from assist3d.core.contracts import Camera, Room
+from assist3d.core.errors import RenderError
 from assist3d.render import make_caster, render_view, vantage_cameras
 from assist3d.render.camera import look_pose
 from assist3d.render.shapes import box_part, combine_parts, shell_parts, sphere_part

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from assist3d.config import RenderConfig
-from assist3d.contracts import Room
+from assist3d.core.contracts import Room
 from assist3d.render import build_point_cloud, make_caster, render_point_cloud, verify_labels
 from assist3d.render.fusion import scene_grid
 from assist3d.render.shapes import box_part, combine_parts, shell_parts, sphere_part

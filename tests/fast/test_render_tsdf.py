@@ -10,8 +10,8 @@ import pytest
 from pydantic import ValidationError
 
 from assist3d.config import RenderConfig, parse_config
-from assist3d.contracts import Room
-from assist3d.errors import ConfigError
+from assist3d.core.contracts import Room
+from assist3d.core.errors import ConfigError
 from assist3d.render import render_point_cloud
 from assist3d.render.fusion import scene_grid
 from assist3d.render.shapes import box_part, combine_parts, shell_parts

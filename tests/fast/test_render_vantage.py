@@ -6,7 +6,7 @@ import numpy as np
 import shapely
 
 from assist3d.config import RenderConfig
-from assist3d.contracts import Room
+from assist3d.core.contracts import Room
 from assist3d.render.shapes import box_part, combine_parts, shell_parts
 from assist3d.render.vantage import candidate_cells, instance_boxes, select_vantage_points
 

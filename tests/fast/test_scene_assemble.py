@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from assist3d.config import LayoutConfig
-from assist3d.contracts import PlacedInstance, SceneLayout
+from assist3d.core.contracts import PlacedInstance, SceneLayout
 from assist3d.export.glb import export_glb
 from assist3d.scene.assemble import assemble_scene
 from assist3d.scene.checks import check_layout

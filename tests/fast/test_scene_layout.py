@@ -10,7 +10,7 @@ import pytest
 
 from assist3d.assets.catalog import Catalog
 from assist3d.config import GenerateConfig
-from assist3d.contracts import AssetRecord, DroppedObject, MeshData, PlacedInstance, Relation, SupportSurface
+from assist3d.core.contracts import AssetRecord, DroppedObject, MeshData, PlacedInstance, Relation, SupportSurface
 from assist3d.scene import layout as layout_mod
 from assist3d.scene.layout import build_layout, sanitise_plan
 from assist3d.planning.relations import GroupPlan, PlannedObject, PlanRequest
@@ -177,7 +177,7 @@ def test_broken_plan_is_repaired_not_raised(tmp_path, placement):
 def test_sanitise_plan_unit():
     recs = tuple(AssetRecord(id=f"a{i}", source="t", name="x", class_name="x", groups=("floor",), size=(1, 1, 1))
                  for i in range(3))
-    from assist3d.contracts import Room
+    from assist3d.core.contracts import Room
 
     req = PlanRequest("floor", recs, Room(((0, 0), (4, 0), (4, 4), (0, 4)), 2.5))
     plan = GroupPlan("floor", (PlannedObject(2), PlannedObject(0, (Relation("near", 0), Relation("edge", None, (), True))),
@@ -241,7 +241,7 @@ def test_cli_layout_and_layout_png(tmp_path):
 
 def test_cli_config_precedence(tmp_path):
     from assist3d.config.presets import compose as compose_config
-    from assist3d.errors import ConfigError
+    from assist3d.core.errors import ConfigError
 
     f = tmp_path / "c.yaml"
     f.write_text("selection: {on_top_count: 1}\nllm: {model: from-file}\n", encoding="utf-8")
@@ -282,7 +282,7 @@ def test_holodeck_style_room_places_repeated_models(tmp_path):
 def test_one_set_of_plan_rules_the_repaired_plan_passes_the_strict_check_and_placement_agrees():
     """review_plan is the only plan checker: what it repairs, validate_plan (the LLM repair loop)
     accepts, and the placement engine's resolve_plan drops the same objects for the same reasons."""
-    from assist3d.contracts import PlacedInstance, Room
+    from assist3d.core.contracts import PlacedInstance, Room
     from assist3d.placement.common import resolve_plan
     from assist3d.planning.relations import review_plan, validate_plan
 

@@ -11,8 +11,8 @@ import pytest
 import shapely
 
 from assist3d.config import LayoutConfig
-from assist3d.contracts import Relation
-from assist3d.errors import PlacementError
+from assist3d.core.contracts import Relation
+from assist3d.core.errors import PlacementError
 from assist3d.scene.geometry import room_polygon, wall_segments
 from assist3d.placement import place_group, place_group_random
 from assist3d.placement.scoring import Candidates, TargetBox, relation_score
@@ -257,7 +257,7 @@ def test_random_baseline_stacks_where_objects_land(catalog):
 
 
 def test_degenerate_room_is_a_clear_placement_error(catalog):
-    from assist3d.contracts import Room
+    from assist3d.core.contracts import Room
 
     room = Room(((0.0, 0.0), (4.0, 0.0), (4.0, 3.0), (0.0, 3.0), (4.0, 0.0)), 2.6)  # self-crossing
     req = PlanRequest("floor", (catalog.get("box00"),), room)
@@ -280,7 +280,7 @@ def test_surface_map_sees_vertical_faces_standing_on_the_surface():
     # parallel to the panel never cross it, but nothing may stand across it.
     import shapely
 
-    from assist3d.contracts import MeshData, SupportSurface
+    from assist3d.core.contracts import MeshData, SupportSurface
     from assist3d.placement.surface import surface_map
 
     v = np.array([[-0.5, -0.5, 0.5], [0.5, -0.5, 0.5], [0.5, 0.5, 0.5], [-0.5, 0.5, 0.5],

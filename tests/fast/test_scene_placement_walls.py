@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from assist3d.config import LayoutConfig
-from assist3d.contracts import PlacedInstance, Relation
+from assist3d.core.contracts import PlacedInstance, Relation
 from assist3d.scene.geometry import pose_matrix, wall_segments, world_bounds
 from assist3d.placement import place_group
 from assist3d.planning.relations import PlanRequest
@@ -138,7 +138,7 @@ def test_on_top_of_a_support_without_surfaces_drops_everything(catalog):
 def test_surface_inside_a_closed_model_or_overhung_carries_nothing(tmp_path):
     from dataclasses import replace
 
-    from assist3d.contracts import MeshData, SupportSurface
+    from assist3d.core.contracts import MeshData, SupportSurface
 
     from test_scene_placement_kit import box_mesh, merge
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from assist3d.config import RoomConfig
-from assist3d.errors import ConfigError
+from assist3d.core.errors import ConfigError
 from assist3d.scene.room import opening_segment, polygon_area, room_walls, sample_room, wall_lengths
 
 

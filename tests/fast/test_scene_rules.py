@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from assist3d.config import GenerateConfig
-from assist3d.contracts import AssetRecord, PlacedInstance, Room
+from assist3d.core.contracts import AssetRecord, PlacedInstance, Room
 from assist3d.planning import planners
 from assist3d.planning.relations import PlanRequest, validate_plan
 from assist3d.planning.rules import FLOOR_RULES, ON_TOP_RULES, WALL_RULES, RulePlanner

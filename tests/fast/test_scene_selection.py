@@ -7,9 +7,9 @@ import pytest
 
 from assist3d.assets.catalog import Catalog
 from assist3d.config import SelectionConfig
-from assist3d.contracts import AssetRecord, SupportSurface
-from assist3d.errors import ConfigError
-from assist3d.taxonomy.classes import canonical_class, resolve_class_list
+from assist3d.core.contracts import AssetRecord, SupportSurface
+from assist3d.core.errors import ConfigError
+from assist3d.core.taxonomy.classes import canonical_class, resolve_class_list
 from assist3d.scene.selection import is_complementary, partner_map, select_objects
 
 FLOOR = ["table", "chair", "bed", "nightstand", "couch", "coffee table", "widget", "gizmo", "doohickey", "thingamajig"]
@@ -167,7 +167,7 @@ def test_on_top_draws_fit_their_support(tmp_path):
 
 
 def test_pool_cache_follows_catalog_changes(tmp_path):
-    from assist3d.contracts import MeshData
+    from assist3d.core.contracts import MeshData
 
     cat = _catalog(tmp_path)
     before = {r.class_name for r in _sel(cat, floor_count=200, wall_count=0, on_top_count=0).floor}
@@ -215,7 +215,7 @@ def test_assets_per_class_keeps_a_fixed_few_models_per_class(tmp_path):
 def _room_catalog(tmp_path, drop: tuple[str, ...] = (), per_class: int = 3) -> Catalog:
     """Three assets of every class named by the room templates, in the template's group; floor
     and wall assets carry a support surface."""
-    from assist3d.taxonomy.roomtypes import ROOM_TEMPLATES
+    from assist3d.core.taxonomy.roomtypes import ROOM_TEMPLATES
 
     recs, seen = [], set()
     for t in ROOM_TEMPLATES.values():
@@ -238,7 +238,7 @@ def _room(cat, seed=0, scene_index=0, **kw):
 
 
 def test_room_type_follows_the_template(tmp_path):
-    from assist3d.taxonomy.roomtypes import ROOM_TEMPLATES
+    from assist3d.core.taxonomy.roomtypes import ROOM_TEMPLATES
 
     cat = _room_catalog(tmp_path)
     for seed in range(8):
@@ -276,7 +276,7 @@ def test_room_type_quantities_follow_their_anchor(tmp_path):
 
 
 def test_room_type_is_seeded_and_covers_every_type(tmp_path):
-    from assist3d.taxonomy.roomtypes import ROOM_TEMPLATES
+    from assist3d.core.taxonomy.roomtypes import ROOM_TEMPLATES
 
     cat = _room_catalog(tmp_path)
     a = [_room(cat, seed=s) for s in range(60)]

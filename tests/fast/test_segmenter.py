@@ -17,22 +17,22 @@ from typer.testing import CliRunner  # noqa: E402
 
 from assist3d.cli import app  # noqa: E402
 from assist3d.config import parse_config  # noqa: E402
-from assist3d.data import open_dataset  # noqa: E402
-from assist3d.engine.toy import make_toy_scene  # noqa: E402
-from assist3d.errors import ConfigError, DataError  # noqa: E402
-from assist3d.evaluation.ap import match_scene, summarize  # noqa: E402
-from assist3d.models.sparse import SparseSceneNorm, sparse_tensor  # noqa: E402
+from assist3d.bench.data import open_dataset  # noqa: E402
+from assist3d.learn.engine.toy import make_toy_scene  # noqa: E402
+from assist3d.core.errors import ConfigError, DataError  # noqa: E402
+from assist3d.bench.evaluation.ap import match_scene, summarize  # noqa: E402
+from assist3d.learn.models.sparse import SparseSceneNorm, sparse_tensor  # noqa: E402
 from assist3d.pipeline import generate_dataset  # noqa: E402
-from assist3d.segmenter import train as train_mod  # noqa: E402
-from assist3d.segmenter.checkpoint import load_segmenter, save_segmenter  # noqa: E402
-from assist3d.segmenter.cluster import cluster_voxels  # noqa: E402
-from assist3d.segmenter.config import ClusterConfig, parse_segmenter_config  # noqa: E402
-from assist3d.segmenter.data import Scene, make_example  # noqa: E402
-from assist3d.segmenter.geometric import segment_geometric  # noqa: E402
-from assist3d.segmenter.infer import segment_points  # noqa: E402
-from assist3d.segmenter.loader import BatchLoader  # noqa: E402
-from assist3d.segmenter.model import Segmenter  # noqa: E402
-from assist3d.segmenter.train import Budget, example_loss, train_segmenter  # noqa: E402
+from assist3d.learn.segmenter import train as train_mod  # noqa: E402
+from assist3d.learn.segmenter.checkpoint import load_segmenter, save_segmenter  # noqa: E402
+from assist3d.learn.segmenter.cluster import cluster_voxels  # noqa: E402
+from assist3d.learn.segmenter.config import ClusterConfig, parse_segmenter_config  # noqa: E402
+from assist3d.learn.segmenter.data import Scene, make_example  # noqa: E402
+from assist3d.learn.segmenter.geometric import segment_geometric  # noqa: E402
+from assist3d.learn.segmenter.infer import segment_points  # noqa: E402
+from assist3d.learn.segmenter.loader import BatchLoader  # noqa: E402
+from assist3d.learn.segmenter.model import Segmenter  # noqa: E402
+from assist3d.learn.segmenter.train import Budget, example_loss, train_segmenter  # noqa: E402
 
 TINY_GEN = {**TINY, "seed": 5}  # the pipeline tests' tiny scenes (6 floor, 2 wall objects, 80 x 60 views)
 TINY_NET = {"net": {"voxel_size": 0.1, "stem_channels": 8, "enc_channels": [8, 16, 16, 24],
@@ -104,8 +104,8 @@ def test_examples_have_consistent_targets(tiny_scenes):
 
 def test_crop_window_centre_never_has_a_negative_range():
     # the window centre once came from rng.uniform(low, high), with low > high by one rounding step
-    from assist3d.segmenter.config import AugmentConfig
-    from assist3d.segmenter.data import augment
+    from assist3d.learn.segmenter.config import AugmentConfig
+    from assist3d.learn.segmenter.data import augment
 
     # the extent of a generated mesh-sampled scene where a + d/2 > b - d/2 after rounding
     c = np.zeros((50, 3), np.float32)
@@ -236,7 +236,7 @@ def test_a_checkpoint_that_would_run_code_is_refused(tmp_path):
 
 
 def test_the_mask3d_checkpoint_loader_is_safe_too(tmp_path):
-    from assist3d.engine.train import load_checkpoint
+    from assist3d.learn.engine.train import load_checkpoint
 
     marker = tmp_path / "pwned"
     torch.save({"model": {}, "config": {}, "x": _Evil(str(marker))}, tmp_path / "evil.pt")
@@ -305,7 +305,7 @@ def _write_model(path: Path) -> Path:
 
 
 def test_segment_a_ply_and_an_npy_and_refuse_bad_input(tmp_path):
-    from assist3d.data.ply import read_ply, write_ply
+    from assist3d.bench.data.ply import read_ply, write_ply
 
     s = _room_with_boxes()
     ckpt = _write_model(tmp_path / "m.pt")
@@ -345,7 +345,7 @@ SHARED_SCAN = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "
 def test_shipped_model_segments_the_real_scan_and_beats_the_geometric_reference(real_scan_path):
     import time
 
-    from assist3d.segmenter.shipped import shipped_model_path
+    from assist3d.learn.segmenter.shipped import shipped_model_path
 
     path = shipped_model_path()
     assert path.stat().st_size <= 5 * 1024 * 1024

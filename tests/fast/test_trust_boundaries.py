@@ -18,10 +18,10 @@ import pytest
 
 from assist3d.assets.catalog import Catalog
 from assist3d.config import LLMConfig
-from assist3d.contracts import AssetRecord, MeshData
-from assist3d.data import open_dataset
-from assist3d.errors import AssetError, AssistError, DataError
-from assist3d.evaluation import evaluate_dataset, export_scannet_txt, import_scannet_txt
+from assist3d.core.contracts import AssetRecord, MeshData
+from assist3d.bench.data import open_dataset
+from assist3d.core.errors import AssetError, AssistError, DataError
+from assist3d.bench.evaluation import evaluate_dataset, export_scannet_txt, import_scannet_txt
 from assist3d.export.writer import file_digest, read_scene_meta
 from llm_fakeserver import FakeServer, Step
 from test_llm_planner import FLOOR, ReversePlanner
@@ -159,7 +159,7 @@ def test_scene_marker_listing_a_file_outside_the_scene_is_not_complete(tmp_path)
 
 
 def test_shown_escapes_every_control_character_and_cuts_long_text():
-    from assist3d.errors import inert, shown
+    from assist3d.core.errors import inert, shown
 
     controls = "".join(map(chr, range(0x20))) + "\x7f" + "".join(map(chr, range(0x80, 0xA0))) + "\u202e\u2028"
     out = shown(f"a{controls}b", limit=10_000)

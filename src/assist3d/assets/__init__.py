@@ -9,7 +9,7 @@ import logging
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..paths import ENV_ASSETS, cache_root, default_library
+from ..core.paths import ENV_ASSETS, cache_root, default_library
 from .catalog import Catalog
 
 if TYPE_CHECKING:

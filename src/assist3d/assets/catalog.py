@@ -24,11 +24,11 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from ..contracts import GROUPS, AssetRecord, MeshData, SkippedAsset
-from ..errors import AssetError, shown
-from ..fileio import write_json_atomic, write_npz_atomic
-from ..paths import inside
-from ..rng import stable_hash
+from ..core.contracts import GROUPS, AssetRecord, MeshData, SkippedAsset
+from ..core.errors import AssetError, shown
+from ..core.fileio import write_json_atomic, write_npz_atomic
+from ..core.paths import inside
+from ..core.rng import stable_hash
 
 log = logging.getLogger(__name__)
 

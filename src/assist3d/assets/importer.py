@@ -14,9 +14,9 @@ import time
 from dataclasses import dataclass
 from typing import Callable, Sequence, TypeVar
 
-from ..contracts import AssetRecord, MeshData, SkippedAsset
-from ..errors import shown
-from ..interrupts import worker_pool
+from ..core.contracts import AssetRecord, MeshData, SkippedAsset
+from ..core.errors import shown
+from ..core.interrupts import worker_pool
 from .catalog import Catalog
 
 log = logging.getLogger(__name__)

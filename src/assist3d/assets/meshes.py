@@ -40,9 +40,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..contracts import GROUPS, AssetRecord, MeshData, SkippedAsset
-from ..errors import AssetError, shown
-from ..fileio import write_json_atomic
+from ..core.contracts import GROUPS, AssetRecord, MeshData, SkippedAsset
+from ..core.errors import AssetError, shown
+from ..core.fileio import write_json_atomic
 from .catalog import Catalog
 from .importer import ImportReport, Progress, run_import
 from .naming import assign_groups, class_from_name

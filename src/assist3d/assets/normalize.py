@@ -1,6 +1,6 @@
 """Mesh normalisation shared by the importers.
 
-Turns a loaded mesh (a trimesh ``Trimesh`` or ``Scene``) into :class:`~assist3d.contracts.MeshData`
+Turns a loaded mesh (a trimesh ``Trimesh`` or ``Scene``) into :class:`~assist3d.core.contracts.MeshData`
 in the canonical asset frame (z up, base at z = 0, footprint centred on x = y = 0, width along x,
 depth along y, front facing -y), with one colour per face, and finds the horizontal surfaces other
 objects can rest on (:func:`extract_supports`).
@@ -17,7 +17,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..contracts import MeshData, SupportSurface
+from ..core.contracts import MeshData, SupportSurface
 
 log = logging.getLogger(__name__)
 

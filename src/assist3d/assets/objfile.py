@@ -25,7 +25,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..errors import shown
+from ..core.errors import shown
 from .normalize import NEUTRAL_GREY, MeshRejected, image_array, sample_texture
 
 log = logging.getLogger(__name__)

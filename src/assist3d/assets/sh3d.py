@@ -27,8 +27,8 @@ from typing import Iterable, Sequence
 import numpy as np
 import shapely
 
-from ..contracts import AssetRecord, MeshData, SkippedAsset
-from ..errors import shown
+from ..core.contracts import AssetRecord, MeshData, SkippedAsset
+from ..core.errors import shown
 from .catalog import Catalog
 from .importer import ImportReport, Progress, run_import
 from .naming import assign_groups, class_from_name, wall_mount

@@ -11,8 +11,8 @@ import typer
 from rich.console import Console
 from rich.logging import RichHandler
 
-from ..errors import AssistError, FaultError, describe_os_error, inert
-from ..interrupts import Interrupted, exit_on_signals
+from ..core.errors import AssistError, FaultError, describe_os_error, inert
+from ..core.interrupts import Interrupted, exit_on_signals
 
 app = typer.Typer(
     name="assist3d",

@@ -1,7 +1,7 @@
 """``assist3d assets ...``: import real catalogs, build the procedural library, inspect a catalog.
 
 Every command takes ``--library DIR``; without it, ``$ASSIST3D_ASSETS``, else the default folder
-(``assist3d.paths.default_library``).
+(``assist3d.core.paths.default_library``).
 """
 
 from __future__ import annotations
@@ -21,10 +21,10 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from ..bounds import MAX_SEED, MAX_WORKERS
-from ..contracts import GROUPS
-from ..errors import AssetError, ConfigError, shown
-from ..paths import ENV_ASSETS, resolve_library
+from ..core.bounds import MAX_SEED, MAX_WORKERS
+from ..core.contracts import GROUPS
+from ..core.errors import AssetError, ConfigError, shown
+from ..core.paths import ENV_ASSETS, resolve_library
 
 LIBRARY_HELP = f"Catalog folder (default: ${ENV_ASSETS}, else <cache>/assets)."
 MAX_PROCEDURAL = 100_000  # as AssetsConfig.procedural_count

@@ -13,8 +13,8 @@ from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
 
-from ..bounds import MAX_WORKERS
-from ..errors import ConfigError, DataError, shown
+from ..core.bounds import MAX_WORKERS
+from ..core.errors import ConfigError, DataError, shown
 
 
 def register(app: typer.Typer) -> None:
@@ -26,7 +26,7 @@ def _load_feature(spec: str):
     """``module:function`` -> the callable (a shape-feature extractor for --ood-reference)."""
     mod_name, _, fn_name = spec.partition(":")
     if not mod_name or not fn_name:
-        raise ConfigError(f"--feature {spec!r}: expected MODULE:FUNCTION, e.g. assist3d.evaluation.ood:default_feature")
+        raise ConfigError(f"--feature {spec!r}: expected MODULE:FUNCTION, e.g. assist3d.bench.evaluation.ood:default_feature")
     try:
         fn = getattr(importlib.import_module(mod_name), fn_name)
     except (ImportError, AttributeError) as e:
@@ -55,8 +55,8 @@ def evaluate(
                                 help=f"Read and match scenes in this many processes (at most {MAX_WORKERS})."),
 ) -> None:
     """Score instance predictions class-agnostically, exactly like the ScanNet benchmark script."""
-    from ..data import open_dataset
-    from ..evaluation import METRIC_KEYS, default_feature, evaluate_dataset
+    from ..bench.data import open_dataset
+    from ..bench.evaluation import METRIC_KEYS, default_feature, evaluate_dataset
 
     dataset = open_dataset(gt)
     reference = open_dataset(ood_reference) if ood_reference else None
@@ -104,7 +104,7 @@ def convert_predictions_cmd(
     to: str = typer.Option(..., "--to", help="'txt' (ScanNet benchmark text format) or 'npz' (assist3d format)."),
 ) -> None:
     """Convert prediction folders between the assist3d .npz format and the ScanNet benchmark text format."""
-    from ..evaluation import convert_predictions
+    from ..bench.evaluation import convert_predictions
 
     if to not in ("txt", "npz"):
         raise ConfigError(f"--to {to!r}: expected 'txt' or 'npz'")

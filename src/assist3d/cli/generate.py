@@ -14,10 +14,10 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 
-from ..bounds import MAX_SCENE_INDEX, MAX_SCENES, MAX_SEED, MAX_WORKERS, check_scene_indices
-from ..errors import ConfigError
+from ..core.bounds import MAX_SCENE_INDEX, MAX_SCENES, MAX_SEED, MAX_WORKERS, check_scene_indices
+from ..core.errors import ConfigError
 from ..config.presets import compose
-from ..records import STAGES, stage_timings
+from ..core.records import STAGES, stage_timings
 
 log = logging.getLogger("assist3d.cli.generate")
 

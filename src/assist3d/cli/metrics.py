@@ -10,10 +10,10 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from ..bounds import MAX_SCENES, MAX_SEED
+from ..core.bounds import MAX_SCENES, MAX_SEED
 from ..config import LLMConfig
-from ..errors import shown
-from ..paths import resolve_library
+from ..core.errors import shown
+from ..core.paths import resolve_library
 
 MAX_CLUSTERS = 1000
 
@@ -45,9 +45,9 @@ def metrics(
                                           "ScanNet scans)."),
 ) -> None:
     """Geometry diversity, context complexity and layout reasonability of one or more datasets."""
-    from ..metrics.diversity import Codebook
-    from ..metrics.realism import load_reference
-    from ..metrics.report import metrics_table, plot_summaries, shared_codebook, summarize_dataset
+    from ..bench.metrics.diversity import Codebook
+    from ..bench.metrics.realism import load_reference
+    from ..bench.metrics.report import metrics_table, plot_summaries, shared_codebook, summarize_dataset
 
     vlm_cfg = None
     if llm_base_url and llm_model:
@@ -86,7 +86,7 @@ def cluster_assets_cmd(
 ) -> None:
     """Compute per-asset shape features (cached) and k-means shape clusters for the geometry ablation."""
     from ..assets.catalog import Catalog
-    from ..metrics.clusters import cluster_assets
+    from ..bench.metrics.clusters import cluster_assets
 
     cat = Catalog.open(resolve_library(library))
     sizes = cluster_assets(cat, k=k, seed=seed)

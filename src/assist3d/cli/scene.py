@@ -9,10 +9,10 @@ from typing import Optional
 import numpy as np
 import typer
 
-from ..bounds import MAX_SCENE_INDEX, MAX_SEED
-from ..contracts import SceneLayout
-from ..errors import DataError, shown
-from ..fileio import write_json_atomic
+from ..core.bounds import MAX_SCENE_INDEX, MAX_SEED
+from ..core.contracts import SceneLayout
+from ..core.errors import DataError, shown
+from ..core.fileio import write_json_atomic
 from ..config.presets import compose
 
 

@@ -18,9 +18,9 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from ..errors import ConfigError, DataError, shown
-from ..fileio import write_bytes_atomic
-from ..paths import safe_name
+from ..core.errors import ConfigError, DataError, shown
+from ..core.fileio import write_bytes_atomic
+from ..core.paths import safe_name
 
 log = logging.getLogger("assist3d.segment")
 
@@ -60,10 +60,10 @@ def probe_cmd(
     _require_torch()
     import torch
 
-    from ..segmenter.config import parse_segmenter_config
-    from ..segmenter.probe import ProbeRequest, run_probe
-    from ..engine.train import resolve_device
-    from ..segmenter.train import Budget
+    from ..learn.segmenter.config import parse_segmenter_config
+    from ..learn.segmenter.probe import ProbeRequest, run_probe
+    from ..learn.engine.train import resolve_device
+    from ..learn.segmenter.train import Budget
 
     if minutes is None and steps is None:
         minutes = 50.0
@@ -131,8 +131,8 @@ def _scan_from_file(path: Path) -> tuple[str, np.ndarray, np.ndarray | None, obj
     .ply / .npy, N > 0. Raw points (a .ply, an (N, 3|6) .npy) may hold non-finite coordinates:
     :func:`usable_points` picks the ones to segment. An (N, 8) .npy is read by the ``array``
     reader and follows its rules."""
-    from ..data.base import REAL_KINDS, clean_colors, read_npy
-    from ..data.ply import read_ply
+    from ..bench.data.base import REAL_KINDS, clean_colors, read_npy
+    from ..bench.data.ply import read_ply
 
     if not path.is_file():
         raise DataError(f"{path}: input not found" + (" (it is a folder: give FORMAT:PATH)" if path.is_dir() else ""))
@@ -146,7 +146,7 @@ def _scan_from_file(path: Path) -> tuple[str, np.ndarray, np.ndarray | None, obj
             raise DataError(f"{path}: expected a numeric (N, 3), (N, 6) or (N, 8) array (xyz[, rgb[, semantic, instance]]), "
                             f"got {a.dtype} {a.shape}")
         if a.shape[1] == 8 and len(a):
-            from ..data.array import ArrayDataset
+            from ..bench.data.array import ArrayDataset
 
             s = ArrayDataset(path).load(path.stem)
             return path.stem, s.coord, s.color, s
@@ -163,7 +163,7 @@ def _scan_from_file(path: Path) -> tuple[str, np.ndarray, np.ndarray | None, obj
 def usable_points(where: str, scene_id: str, coord: np.ndarray) -> np.ndarray:
     """(N,) bool: the points to segment, those with finite coordinates within ``MAX_COORD_M``;
     the others get no instance, with one warning giving their count. DataError when none is left."""
-    from ..data.base import MAX_COORD_M
+    from ..bench.data.base import MAX_COORD_M
 
     with np.errstate(invalid="ignore"):
         ok = np.all(np.isfinite(coord) & (np.abs(coord) <= MAX_COORD_M), axis=1)
@@ -178,7 +178,7 @@ def usable_points(where: str, scene_id: str, coord: np.ndarray) -> np.ndarray:
 
 def _inputs(spec: str):
     """Yield (scene_id, coord, color, sample-with-GT-or-None) for a file or a reader spec."""
-    from ..data import READERS, open_dataset
+    from ..bench.data import READERS, open_dataset
 
     if spec.split(":", 1)[0].strip().lower() not in READERS or Path(spec).exists():
         yield _scan_from_file(Path(spec))
@@ -230,9 +230,9 @@ def segment_cmd(
     threads: int = typer.Option(0, "--threads", min=0, max=256, help="torch CPU threads (0 = all cores)"),
 ) -> None:
     """Segment object instances in a scan (class-agnostic), with no GPU and no download."""
-    from ..evaluation.ap import match_scene, summarize
-    from ..evaluation.predictions import save_predictions
-    from ..data.ply import write_ply
+    from ..bench.evaluation.ap import match_scene, summarize
+    from ..bench.evaluation.predictions import save_predictions
+    from ..bench.data.ply import write_ply
 
     if method not in ("learned", "geometric"):
         raise ConfigError(f"--method {method!r}: expected 'learned' or 'geometric'")
@@ -245,8 +245,8 @@ def segment_cmd(
         _require_torch()
         import torch
 
-        from ..segmenter.checkpoint import load_segmenter
-        from ..segmenter.shipped import shipped_model_path
+        from ..learn.segmenter.checkpoint import load_segmenter
+        from ..learn.segmenter.shipped import shipped_model_path
 
         if threads:
             torch.set_num_threads(threads)
@@ -261,11 +261,11 @@ def segment_cmd(
         finite = usable_points(input_, scene_id, coord)
         sub_color = color[finite] if color is not None else None
         if loaded is not None:
-            from ..segmenter.infer import segment_points
+            from ..learn.segmenter.infer import segment_points
 
             seg = segment_points(loaded.model, loaded.config, coord[finite], sub_color)
         else:
-            from ..segmenter.geometric import segment_geometric
+            from ..learn.segmenter.geometric import segment_geometric
 
             seg = segment_geometric(coord[finite])
         masks = np.zeros((len(seg.scores), len(coord)), bool)

@@ -12,8 +12,8 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 from rich.table import Table
 
-from ..bounds import MAX_THREADS
-from ..errors import ConfigError
+from ..core.bounds import MAX_THREADS
+from ..core.errors import ConfigError
 
 MAX_EPOCHS = 100_000
 MAX_TOP_K = 10_000
@@ -40,8 +40,8 @@ def register(app: typer.Typer) -> None:
         """Train the model; writes OUT/last.pt, OUT/epoch_NNNN.pt, OUT/metrics.csv and OUT/config.yaml."""
         _require_torch()
 
-        from ..engine.config import load_train_config, parse_data_arg
-        from ..engine.train import train
+        from ..learn.engine.config import load_train_config, parse_data_arg
+        from ..learn.engine.train import train
 
         cfg = load_train_config(config)
         if data:
@@ -78,7 +78,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Write <scene_id>.npz (masks bool [M, N], scores float32 [M]) for every scene; score them with evaluate."""
         _require_torch()
-        from ..engine.predict import predict_dataset
+        from ..learn.engine.predict import predict_dataset
 
         overrides: dict = {}
         if top_k > 0:
@@ -104,8 +104,8 @@ def register(app: typer.Typer) -> None:
         """Forward and forward+backward time and peak memory of the model on one scene."""
         _require_torch()
 
-        from ..engine.bench import run_model_bench
-        from ..engine.config import TrainConfig, load_train_config
+        from ..learn.engine.bench import run_model_bench
+        from ..learn.engine.config import TrainConfig, load_train_config
 
         if backend not in ("torch", "spconv"):
             raise ConfigError(f"--backend {backend!r}: expected torch or spconv")

@@ -14,14 +14,14 @@ from typing import Any, Literal, TypeVar
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from ..errors import ConfigError, shown
-from ..fileio import write_text_atomic
-from ..taxonomy.roomtypes import ROOM_TEMPLATES
+from ..core.errors import ConfigError, shown
+from ..core.fileio import write_text_atomic
+from ..core.taxonomy.roomtypes import ROOM_TEMPLATES
 
 
 class Section(BaseModel):
-    """The base of every configuration schema: generation (here), training (:mod:`assist3d.engine.config`)
-    and the CPU segmenter (:mod:`assist3d.segmenter.config`). Unknown keys are refused (with the closest
+    """The base of every configuration schema: generation (here), training (:mod:`assist3d.learn.engine.config`)
+    and the CPU segmenter (:mod:`assist3d.learn.segmenter.config`). Unknown keys are refused (with the closest
     known key, see :func:`validate_config`), assignments are validated, NaN and infinity are refused."""
 
     model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)
@@ -94,10 +94,10 @@ class SelectionConfig(Section):
         "heterogeneous", description="'heterogeneous': the paper's random draws (floor_count, wall_count, "
                                      "on_top_count per support); 'room-type': a Holodeck-style room: a room type "
                                      "drawn per scene and its typical object list with quantities "
-                                     "(assist3d.taxonomy.roomtypes; floor_count and wall_count are then unused, "
+                                     "(assist3d.core.taxonomy.roomtypes; floor_count and wall_count are then unused, "
                                      "on_top_count still applies).")
     room_types: list[str] | None = Field(None, description="Room types drawn from with strategy 'room-type' "
-                                                           "(None = all of assist3d.taxonomy.roomtypes.ROOM_TEMPLATES).")
+                                                           "(None = all of assist3d.core.taxonomy.roomtypes.ROOM_TEMPLATES).")
     on_top_fit: bool = Field(True, description="Draw a support's K on-top assets only among those whose box fits "
                                                "one of its surfaces (footprint, either way round, and clearance); "
                                                "paper: unspecified. False = the whole on-top pool.")
@@ -175,7 +175,7 @@ class RenderConfig(Section):
                                                                      "hand-held scan does.")
     width: int = Field(640, ge=8, le=16384, description="Image width, px, 8..16384 (ScanNet depth: 640); with height, "
                                                         "views and voxel_size also bounded by a memory estimate that "
-                                                        "refuses a run before it starts (assist3d.bounds).")
+                                                        "refuses a run before it starts (assist3d.core.bounds).")
     height: int = Field(480, ge=8, le=16384, description="Image height, px, 8..16384 (ScanNet depth: 480).")
     fx: float = Field(577.9, gt=0, description="Focal length x, px (ScanNet depth ~577.9).")
     fy: float = Field(577.9, gt=0, description="Focal length y, px.")

@@ -10,11 +10,11 @@ import difflib
 from pathlib import Path
 
 from . import GenerateConfig, merge_config, parse_config, read_config_file
-from ..errors import ConfigError
-from ..taxonomy.roomtypes import template_classes
+from ..core.errors import ConfigError
+from ..core.taxonomy.roomtypes import template_classes
 
-# Every class a Holodeck-style room may hold (the room templates of assist3d.taxonomy.roomtypes).
-# Canonical names (see assist3d.taxonomy.classes): an asset matches when its class or its canonical
+# Every class a Holodeck-style room may hold (the room templates of assist3d.core.taxonomy.roomtypes).
+# Canonical names (see assist3d.core.taxonomy.classes): an asset matches when its class or its canonical
 # class is listed, so "bookcase" and "bedside table" assets count as bookshelf and nightstand.
 # Every name matches classes of the built-in procedural library (tests check it).
 HOUSEHOLD_CLASSES = template_classes()

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from ..assets.catalog import Catalog
-from ..contracts import MeshData, SceneLayout
-from ..fileio import write_bytes_atomic
+from ..core.contracts import MeshData, SceneLayout
+from ..core.fileio import write_bytes_atomic
 from ..scene.assemble import instance_meshes
 from ..scene.shell import build_shell
 

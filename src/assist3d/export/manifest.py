@@ -11,9 +11,9 @@ from pathlib import Path
 
 from .. import __version__
 from ..config import GenerateConfig, config_to_dict
-from ..errors import DataError
-from ..fileio import write_json_atomic
-from ..records import manifest_entry
+from ..core.errors import DataError
+from ..core.fileio import write_json_atomic
+from ..core.records import manifest_entry
 
 log = logging.getLogger(__name__)
 
@@ -52,7 +52,7 @@ def versions() -> dict[str, str]:
 
 def scene_entry(meta: dict) -> dict:
     """The manifest entry of a scene, from its completion marker (the keys of
-    :data:`assist3d.records.MANIFEST_ENTRY_KEYS`)."""
+    :data:`assist3d.core.records.MANIFEST_ENTRY_KEYS`)."""
     return manifest_entry(meta)
 
 

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..contracts import PointSample
-from ..fileio import write_bytes_atomic
+from ..core.contracts import PointSample
+from ..core.fileio import write_bytes_atomic
 
 __all__ = ["instance_palette", "instance_colors", "ply_bytes", "write_ply"]
 

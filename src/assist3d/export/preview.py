@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..contracts import SceneLayout
-from ..errors import DataError
-from ..fileio import write_bytes_atomic
+from ..core.contracts import SceneLayout
+from ..core.errors import DataError
+from ..core.fileio import write_bytes_atomic
 from .ply import BACKGROUND_RGB, instance_colors
 from .writer import load_scene_arrays
 

@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from ..assets.catalog import Catalog
-from ..contracts import SceneLayout
-from ..errors import shown
-from ..fileio import write_bytes_atomic
+from ..core.contracts import SceneLayout
+from ..core.errors import shown
+from ..core.fileio import write_bytes_atomic
 from ..scene.room import opening_segment
 
 log = logging.getLogger(__name__)

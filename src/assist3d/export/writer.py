@@ -19,10 +19,10 @@ from typing import Callable
 
 import numpy as np
 
-from ..contracts import PointSample, SceneLayout
-from ..errors import DataError
-from ..fileio import write_bytes_atomic, write_json_atomic
-from ..paths import inside
+from ..core.contracts import PointSample, SceneLayout
+from ..core.errors import DataError
+from ..core.fileio import write_bytes_atomic, write_json_atomic
+from ..core.paths import inside
 from .ply import ply_bytes
 
 log = logging.getLogger(__name__)
@@ -93,7 +93,7 @@ def write_scene(scene_dir: str | Path, sample: PointSample, layout: SceneLayout,
 
 def remove_stale_temps(folder: str | Path) -> int:
     """Delete temporary files a killed writer left in ``folder`` (``.<name>.<random>.tmp``, the
-    pattern of :func:`assist3d.fileio.atomic_path`); returns how many."""
+    pattern of :func:`assist3d.core.fileio.atomic_path`); returns how many."""
     n = 0
     for p in Path(folder).glob(".*.tmp"):
         p.unlink(missing_ok=True)

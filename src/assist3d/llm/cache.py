@@ -16,8 +16,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..fileio import write_json_atomic
-from ..paths import cache_root
+from ..core.fileio import write_json_atomic
+from ..core.paths import cache_root
 
 log = logging.getLogger(__name__)
 

@@ -43,8 +43,8 @@ except ImportError:  # not POSIX (Windows): request slots are counted per proces
     fcntl = None  # type: ignore[assignment]
 
 from ..config import LLMConfig
-from ..errors import ConfigError, LLMError, shown
-from ..rng import stable_hash
+from ..core.errors import ConfigError, LLMError, shown
+from ..core.rng import stable_hash
 from .cache import CachedAnswer, ResponseCache, cache_key
 
 log = logging.getLogger(__name__)

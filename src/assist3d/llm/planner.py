@@ -28,10 +28,10 @@ from typing import Any
 import numpy as np
 
 from ..config import LLMConfig
-from ..contracts import Relation, Room
-from ..errors import ConfigError, LLMError, inert
+from ..core.contracts import Relation, Room
+from ..core.errors import ConfigError, LLMError, inert
 from ..planning.relations import CROSS_GROUP, GroupPlan, PlannedObject, Planner, PlanRequest, validate_plan
-from ..taxonomy.roomtypes import RoomTemplate
+from ..core.taxonomy.roomtypes import RoomTemplate
 from .cache import ResponseCache
 from .client import ChatAnswer, ChatClient, Usage
 from .prompts import render_plan_messages, render_repair_message

@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..contracts import PlacedInstance, Room
-from ..errors import ConfigError
+from ..core.contracts import PlacedInstance, Room
+from ..core.errors import ConfigError
 from ..planning.relations import CROSS_GROUP, RELATIONS, PlanRequest, group_kind
 
 TEMPLATE_FILES = {"floor": "floor.txt", "wall": "wall.txt", "on": "on_top.txt", "vlm": "vlm_score.txt",

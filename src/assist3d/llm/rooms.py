@@ -2,10 +2,10 @@
 room-type`` when an endpoint is configured.
 
 The model gets the room type, the room and the catalog's class names per group (canonical names,
-see :mod:`assist3d.taxonomy.classes`), and answers with floor and wall entries (class, quantity,
+see :mod:`assist3d.core.taxonomy.classes`), and answers with floor and wall entries (class, quantity,
 whether the copies are one model) and the classes of the small objects
 (``resources/prompts/room_objects.txt``). :func:`check_room_answer` turns the answer into a
-:class:`~assist3d.taxonomy.roomtypes.RoomTemplate` with every entry certain (probability 1):
+:class:`~assist3d.core.taxonomy.roomtypes.RoomTemplate` with every entry certain (probability 1):
 unknown class names are dropped with a reason (never mapped to a close name, as for relations),
 quantities are clamped to 1..8. No repair round: an unusable answer, or a failed call, leaves the
 built-in template of the room type in charge, with the reason in the layout's notes.
@@ -15,9 +15,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..contracts import Room
-from ..taxonomy.classes import normalise_class
-from ..taxonomy.roomtypes import ROOM_TEMPLATES, Item, RoomTemplate
+from ..core.contracts import Room
+from ..core.taxonomy.classes import normalise_class
+from ..core.taxonomy.roomtypes import ROOM_TEMPLATES, Item, RoomTemplate
 from .prompts import describe_room, load_template
 
 MAX_QUANTITY = 8

@@ -23,7 +23,7 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
-from ..contracts import Relation
+from ..core.contracts import Relation
 from ..planning.relations import CROSS_GROUP, RELATIONS, PlannedObject, PlanRequest, group_kind
 
 # Relations that are hard constraints unless the answer says otherwise (the rest are soft unless

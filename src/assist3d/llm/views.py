@@ -15,8 +15,8 @@ from typing import Callable
 
 import numpy as np
 
-from ..contracts import SceneMesh
-from ..errors import RenderError
+from ..core.contracts import SceneMesh
+from ..core.errors import RenderError
 from ..render.camera import pixel_directions
 from ..render.raycast import make_caster
 from ..render.rgbd import face_normals

@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 
 from ..config import LLMConfig
-from ..contracts import Room
-from ..errors import ConfigError, DataError, LLMError, inert, shown
+from ..core.contracts import Room
+from ..core.errors import ConfigError, DataError, LLMError, inert, shown
 from .cache import ResponseCache
 from .client import ChatClient, Usage
 from .prompts import describe_room, load_template, render_repair_message

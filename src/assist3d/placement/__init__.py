@@ -16,8 +16,8 @@ import numpy as np
 
 from ..assets.catalog import Catalog
 from ..config import LayoutConfig
-from ..contracts import DroppedObject, PlacedInstance
-from ..errors import PlacementError
+from ..core.contracts import DroppedObject, PlacedInstance
+from ..core.errors import PlacementError
 from ..planning.relations import GroupPlan, PlanRequest, group_kind
 from ..scene.geometry import pose_matrix
 from .common import Item, relations_for_instance, resolve_plan

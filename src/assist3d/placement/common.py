@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contracts import AssetRecord, PlacedInstance, Relation
+from ..core.contracts import AssetRecord, PlacedInstance, Relation
 from ..planning.relations import CROSS_GROUP, RELATIONS, GroupPlan, PlanRequest, review_plan
 from ..scene.geometry import pose_xyz_yaw
 from .scoring import SATISFIED, Candidates, TargetBox, relation_score

@@ -18,7 +18,7 @@ import numpy as np
 import shapely
 
 from ..config import LayoutConfig
-from ..contracts import MeshData, PlacedInstance, Room, SupportSurface
+from ..core.contracts import MeshData, PlacedInstance, Room, SupportSurface
 from ..scene.geometry import InstanceBoxes, boxes_collide, pose_xyz_yaw, world_bounds
 from .common import Item, MovingBoxesMixin, RelationState, order_candidates, target_box
 from .scoring import Candidates

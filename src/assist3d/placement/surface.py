@@ -29,7 +29,7 @@ import numpy as np
 import shapely
 from scipy import ndimage
 
-from ..contracts import MeshData, SupportSurface
+from ..core.contracts import MeshData, SupportSurface
 
 SUPPORT_TOL = 0.005  # the mesh top may differ from the surface height by this much, m
 MIN_SUPPORTED = 0.6  # fraction of footprint samples that must be supported

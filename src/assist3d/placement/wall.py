@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import LayoutConfig
-from ..contracts import PlacedInstance, Room
+from ..core.contracts import PlacedInstance, Room
 from ..scene.geometry import (InstanceBoxes, along_walls, footprints_overlap, rect_corners, rects_in_polygon, room_polygon,
                         wall_segments, z_overlap)
 from .common import PRIOR_WEIGHT, Item, MovingBoxesMixin, RelationState, order_candidates, target_box

@@ -7,7 +7,7 @@ import threading
 from typing import Callable
 
 from ..config import GenerateConfig
-from ..registry import Registry
+from ..core.registry import Registry
 from .relations import Planner
 from .rules import RulePlanner
 

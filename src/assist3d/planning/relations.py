@@ -15,7 +15,7 @@ from typing import Container, Protocol, Sequence
 
 import numpy as np
 
-from ..contracts import AssetRecord, PlacedInstance, Relation, Room
+from ..core.contracts import AssetRecord, PlacedInstance, Relation, Room
 
 
 @dataclass(frozen=True)

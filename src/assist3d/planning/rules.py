@@ -3,7 +3,7 @@
 It implements :class:`assist3d.planning.relations.Planner` (``name = "rules"``) and is the offline
 default and the fallback of the LLM planner. All knowledge lives in three data tables below
 (:data:`FLOOR_RULES`, :data:`WALL_RULES`, :data:`ON_TOP_RULES`), keyed by canonical class names
-(see :mod:`assist3d.taxonomy.classes`); a class not found there falls back to its head noun and then
+(see :mod:`assist3d.core.taxonomy.classes`); a class not found there falls back to its head noun and then
 to size-based defaults.
 
 Ordering: objects are sorted by ``tier`` (anchors such as beds and tables first, the objects that
@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contracts import AssetRecord, PlacedInstance, Relation
-from ..taxonomy.classes import canonical_class, normalise_class
+from ..core.contracts import AssetRecord, PlacedInstance, Relation
+from ..core.taxonomy.classes import canonical_class, normalise_class
 from .relations import GroupPlan, PlannedObject, PlanRequest, group_kind
 
 log = logging.getLogger(__name__)

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..config import RenderConfig
-from ..contracts import PointSample, Room, SceneMesh
+from ..core.contracts import PointSample, Room, SceneMesh
 from .camera import vantage_cameras
 from .fusion import FusedHits, cast_and_fuse, scene_grid
 from .meshsample import nearest_instance, sample_surface

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from ..config import RenderConfig
-from ..contracts import Camera
+from ..core.contracts import Camera
 
 __all__ = ["intrinsics", "look_pose", "vantage_cameras", "pixel_directions", "rotate_directions", "world_directions"]
 

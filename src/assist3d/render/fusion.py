@@ -20,7 +20,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from ..config import RenderConfig
-from ..contracts import Camera, SceneMesh
+from ..core.contracts import Camera, SceneMesh
 from .camera import pixel_directions, rotate_directions
 from .raycast import RayCaster
 from .sensor import apply_depth_sensor, sensor_enabled

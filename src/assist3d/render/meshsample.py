@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contracts import SceneMesh
-from ..errors import RenderError
+from ..core.contracts import SceneMesh
+from ..core.errors import RenderError
 from .voxel import VoxelGrid, pick_one_per_voxel
 
 __all__ = ["face_areas", "sample_faces", "sample_surface", "nearest_instance"]

@@ -17,8 +17,8 @@ from typing import Callable, Protocol
 
 import numpy as np
 
-from ..errors import RenderError
-from ..registry import Registry
+from ..core.errors import RenderError
+from ..core.registry import Registry
 
 log = logging.getLogger(__name__)
 

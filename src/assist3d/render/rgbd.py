@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contracts import Camera, RGBDView, SceneMesh
+from ..core.contracts import Camera, RGBDView, SceneMesh
 from .camera import pixel_directions, world_directions
 from .raycast import RayCaster
 

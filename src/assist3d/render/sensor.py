@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from ..config import RenderConfig
-from ..contracts import SceneMesh
+from ..core.contracts import SceneMesh
 from .rgbd import face_normals
 
 __all__ = ["sensor_enabled", "apply_depth_sensor", "view_gains"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contracts import Room, SceneMesh
+from ..core.contracts import Room, SceneMesh
 
 __all__ = ["shell_parts", "box_part", "sphere_part", "combine_parts"]
 

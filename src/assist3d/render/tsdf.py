@@ -37,8 +37,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import RenderConfig
-from ..contracts import Camera, SceneMesh
-from ..errors import ConfigError
+from ..core.contracts import Camera, SceneMesh
+from ..core.errors import ConfigError
 from .fusion import scene_grid
 from .voxel import VoxelGrid, pick_one_per_voxel, pick_one_per_voxel_scan
 

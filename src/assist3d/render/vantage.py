@@ -15,8 +15,8 @@ import numpy as np
 import shapely
 
 from ..config import RenderConfig
-from ..contracts import Room, SceneMesh
-from ..errors import RenderError
+from ..core.contracts import Room, SceneMesh
+from ..core.errors import RenderError
 
 log = logging.getLogger(__name__)
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contracts import PointSample, SceneMesh
+from ..core.contracts import PointSample, SceneMesh
 from .raycast import RayCaster
 
 __all__ = ["LabelCheck", "verify_labels"]

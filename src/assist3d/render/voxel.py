@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import RenderError
+from ..core.errors import RenderError
 
 __all__ = ["VoxelGrid", "pick_one_per_voxel", "pick_one_per_voxel_scan"]
 

@@ -1,5 +1,5 @@
 """Scene assembly: every instance mesh moved by its pose, plus the room shell, as one labelled
-triangle soup (:class:`~assist3d.contracts.SceneMesh`); the GLB file is written by
+triangle soup (:class:`~assist3d.core.contracts.SceneMesh`); the GLB file is written by
 :func:`assist3d.export.glb.export_glb`."""
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ from typing import Sequence
 import numpy as np
 
 from ..assets.catalog import Catalog
-from ..contracts import MeshData, SceneLayout, SceneMesh
-from ..errors import AssetError
+from ..core.contracts import MeshData, SceneLayout, SceneMesh
+from ..core.errors import AssetError
 from .geometry import transform_points
 from .shell import build_shell
 

@@ -34,7 +34,7 @@ import numpy as np
 import shapely
 
 from ..assets.catalog import Catalog
-from ..contracts import MeshData, PlacedInstance, SceneLayout
+from ..core.contracts import MeshData, PlacedInstance, SceneLayout
 from ..placement.surface import distinct_counts
 from .assemble import instance_meshes
 from .geometry import footprint_polygon, pose_xyz_yaw, room_polygon, wall_segments

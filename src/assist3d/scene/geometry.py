@@ -1,6 +1,6 @@
 """Planar and box geometry used by placement, assembly and checks.
 
-Conventions (see :mod:`assist3d.contracts`): metres, z up, an asset's canonical frame has its base
+Conventions (see :mod:`assist3d.core.contracts`): metres, z up, an asset's canonical frame has its base
 at z = 0, its footprint centred at the origin, width along x, depth along y and its front facing
 -y. A pose here is ``(x, y, yaw, z)``: a rotation by ``yaw`` about z followed by a translation;
 :func:`pose_matrix` turns it into the 4x4 row-major matrix stored in ``PlacedInstance.pose``.
@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from ..contracts import PlacedInstance, Room
-from ..errors import PlacementError
+from ..core.contracts import PlacedInstance, Room
+from ..core.errors import PlacementError
 
 __all__ = [
     "pose_matrix", "pose_xyz_yaw", "transform_points", "rotated_half_extents", "rect_corners",

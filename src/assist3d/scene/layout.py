@@ -30,14 +30,14 @@ from typing import Callable
 
 from ..assets.catalog import Catalog
 from ..config import GenerateConfig
-from ..contracts import AssetRecord, DroppedObject, PlacedInstance, SceneLayout
-from ..errors import AssistError
+from ..core.contracts import AssetRecord, DroppedObject, PlacedInstance, SceneLayout
+from ..core.errors import AssistError
 from ..placement import PlacementResult, place_group, place_group_random
 from ..planning.planners import make_planner
 from ..planning.relations import GroupPlan, Planner, PlanRequest, review_plan
 from ..planning.rules import RulePlanner
-from ..records import PLAN_COUNTERS
-from ..rng import make_rng
+from ..core.records import PLAN_COUNTERS
+from ..core.rng import make_rng
 from .room import sample_room
 from .selection import Selection, select_objects
 

@@ -1,6 +1,6 @@
 """Room shells sized like real scans: rectangular or L-shaped footprints with doors and windows.
 
-``sample_room(cfg, rng)`` draws a :class:`~assist3d.contracts.Room`: a counter-clockwise floor
+``sample_room(cfg, rng)`` draws a :class:`~assist3d.core.contracts.Room`: a counter-clockwise floor
 polygon with its minimum corner at the origin, a wall height, and non-overlapping door and window
 openings on walls long enough to hold them. Wall ``i`` runs from vertex ``i`` to vertex ``i+1``.
 """
@@ -13,8 +13,8 @@ import math
 import numpy as np
 
 from ..config import RoomConfig
-from ..contracts import Opening, Room
-from ..errors import ConfigError
+from ..core.contracts import Opening, Room
+from ..core.errors import ConfigError
 
 log = logging.getLogger(__name__)
 

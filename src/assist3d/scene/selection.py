@@ -19,7 +19,7 @@ box fits one of its surfaces (footprint either way round, height under the clear
 cannot hold a television, and drawing one only to drop it wastes the search budget.
 
 ``strategy: room-type`` replaces the random floor and wall draws by a Holodeck-style room: a room
-type drawn per scene and its typical object list (:mod:`assist3d.taxonomy.roomtypes`), with on-top
+type drawn per scene and its typical object list (:mod:`assist3d.core.taxonomy.roomtypes`), with on-top
 draws restricted to the room's small-object classes.
 
 Ablation controls: ``pairing_prob`` q co-selects each drawn class's partner class, ``clusters``
@@ -39,11 +39,11 @@ import numpy as np
 
 from ..assets.catalog import Catalog
 from ..config import SelectionConfig
-from ..contracts import AssetRecord
-from ..errors import ConfigError
-from ..rng import make_rng
-from ..taxonomy.classes import ClassList, canonical_class, normalise_class, resolve_class_list
-from ..taxonomy.roomtypes import ROOM_TEMPLATES, Item, RoomTemplate
+from ..core.contracts import AssetRecord
+from ..core.errors import ConfigError
+from ..core.rng import make_rng
+from ..core.taxonomy.classes import ClassList, canonical_class, normalise_class, resolve_class_list
+from ..core.taxonomy.roomtypes import ROOM_TEMPLATES, Item, RoomTemplate
 
 log = logging.getLogger(__name__)
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import mapbox_earcut
 import numpy as np
 
-from ..contracts import MeshData, Room
+from ..core.contracts import MeshData, Room
 from .geometry import room_polygon, wall_segments
 
 FLOOR_COLOR = (156, 134, 110)

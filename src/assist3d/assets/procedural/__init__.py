@@ -29,9 +29,9 @@ from typing import Iterable
 
 import numpy as np
 
-from ...contracts import AssetRecord, MeshData, SupportSurface
-from ...errors import AssetError
-from ...interrupts import worker_pool
+from ...core.contracts import AssetRecord, MeshData, SupportSurface
+from ...core.errors import AssetError
+from ...core.interrupts import worker_pool
 from ..catalog import Catalog
 from . import (abstract, appliances, household, seating, small_extra, small_home, small_misc,  # noqa: F401
                storage, tables, wall, wall_extra)  # importing a module registers its families

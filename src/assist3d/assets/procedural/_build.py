@@ -20,7 +20,7 @@ import numpy as np
 import trimesh
 from trimesh import creation
 
-from ...contracts import MeshData, SupportSurface
+from ...core.contracts import MeshData, SupportSurface
 
 Color = tuple[int, int, int]
 Vec3 = Sequence[float]

@@ -7,7 +7,7 @@ from typing import Callable
 
 import numpy as np
 
-from ...contracts import GROUPS
+from ...core.contracts import GROUPS
 from ._build import Shape
 
 Builder = Callable[[np.random.Generator], Shape]

@@ -1,0 +1,247 @@
+"""Compare datasets on the paper's three principles: geometry diversity, context complexity and
+layout reasonability, on any dataset a reader understands (synthetic or real)."""
+
+from __future__ import annotations
+
+import json
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from ...assets import open_catalog
+from ...assets.catalog import Catalog
+from ...core.contracts import SceneLayout
+from ..data import open_dataset
+from ...core.errors import AssistError, DataError
+from ...export.manifest import read_manifest
+from ...core.fileio import atomic_path
+from ...llm.vlm import vlm_layout_score
+from ...core.rng import make_rng
+from .context import context_complexity, per_class_max_cooccurrence
+from .diversity import Codebook, fit_codebook, geometry_diversity
+from .features import FEATURE_DIM, instance_descriptors
+from .plausibility import score_layout
+from .realism import RealismReference, RealismStats, realism_score, scene_stats
+
+log = logging.getLogger(__name__)
+
+POOL_PER_DATASET = 4000
+
+
+@dataclass
+class DatasetSummary:
+    """Everything the metrics need from one dataset, gathered in one pass over its scenes."""
+
+    name: str  # the dataset as the user named it (the key of the metrics table)
+    spec: str = ""  # FORMAT:PATH (a bare folder gets "assist3d:")
+    scenes: int = 0
+    instances: int = 0
+    features: np.ndarray = field(default_factory=lambda: np.zeros((0, FEATURE_DIM), np.float32))
+    scene_classes: list = field(default_factory=list)
+    layout_scores: list = field(default_factory=list)
+    layout_components: list = field(default_factory=list)
+    layout_reason: str | None = None
+    vlm_scores: list = field(default_factory=list)
+    realism: RealismStats = field(default_factory=RealismStats)
+
+
+def normalise_spec(spec: str) -> str:
+    """A bare folder means our own format (``assist3d:``)."""
+    head = spec.split(":", 1)[0]
+    if ":" in spec and head in {"scannet", "scannetpp", "s3dis", "pointcept", "assist3d", "array"}:
+        return spec
+    return f"assist3d:{spec}"
+
+
+def _dataset_catalog(root: Path, assets: str | None) -> Catalog | None:
+    """The catalog a generated dataset was made from: --assets, else the one its manifest names."""
+    if assets:
+        return Catalog.open(assets)
+    m = read_manifest(root)
+    if m is None:
+        return None
+    path = m.get("catalog") or m.get("assets")  # `assist3d generate` writes the catalog folder as "assets"
+    if isinstance(path, dict):
+        path = path.get("path")
+    if path and Catalog.exists(path):
+        return Catalog.open(path)
+    acfg = (m.get("config") or {}).get("assets") or {}
+    if acfg.get("library") and Catalog.exists(acfg["library"]):
+        return Catalog.open(acfg["library"])
+    try:
+        return open_catalog(None, procedural_count=int(acfg.get("procedural_count", 2000)),
+                            procedural_seed=int(acfg.get("procedural_seed", 0)))
+    except AssistError as e:
+        log.warning("%s: cannot open the catalog it was generated from (%s)", root, e)
+        return None
+
+
+def summarize_dataset(spec: str, *, assets: str | None = None, max_scenes: int | None = None,
+                      seed: int = 0, vlm_cfg=None) -> DatasetSummary:
+    """Read a dataset once: instance descriptors, per-scene class sets, layout scores."""
+    given, spec = spec, normalise_spec(spec)
+    ds = open_dataset(spec)
+    summary = DatasetSummary(name=given, spec=spec)
+    fmt = spec.split(":", 1)[0]
+    catalog = None
+    if fmt == "assist3d":
+        catalog = _dataset_catalog(Path(ds.root), assets)
+        if catalog is None:
+            summary.layout_reason = "the asset catalog of this dataset was not found (pass --assets)"
+    else:
+        summary.layout_reason = f"{fmt} datasets have no layout JSON"
+    ids = list(ds.scene_ids)[: max_scenes or None]
+    rng = make_rng(seed, "metrics", spec)
+    feats = []
+    for sid in ids:
+        sample = ds.load(sid)
+        inst_ids, f = instance_descriptors(sample.coord, sample.instance, rng=rng)
+        feats.append(f)
+        summary.realism.add(scene_stats(sample.coord, sample.instance))
+        layout = _load_layout(Path(ds.root) / sid) if fmt == "assist3d" else None
+        if layout is not None:
+            summary.scene_classes.append({i.class_name for i in layout.instances})
+            summary.instances += len(layout.instances)
+            if catalog is not None:
+                try:
+                    rep = score_layout(layout, catalog)
+                    summary.layout_scores.append(rep.score)
+                    summary.layout_components.append(rep.components)
+                except AssistError as e:
+                    summary.layout_reason = str(e)
+                    catalog = None
+                    summary.layout_scores = []
+            if vlm_cfg is not None:
+                s = vlm_layout_score(Path(ds.root) / sid, vlm_cfg)
+                if s is not None:
+                    summary.vlm_scores.append(s)
+        else:
+            # classes from point labels: each instance's majority semantic label
+            m = sample.instance >= 0
+            inst = sample.instance[m]
+            seg = sample.segment[m]
+            classes = set()
+            for u in np.unique(inst):
+                labs = seg[inst == u]
+                labs = labs[labs >= 0]
+                classes.add(f"class_{int(np.bincount(labs).argmax())}" if len(labs) else f"instance_{int(u)}")
+            summary.scene_classes.append(classes)
+            summary.instances += int(len(np.unique(inst)))
+        summary.scenes += 1
+    summary.features = np.concatenate(feats) if feats else np.zeros((0, FEATURE_DIM), np.float32)
+    if fmt == "assist3d" and catalog is not None and not summary.layout_scores and summary.scenes:
+        summary.layout_reason = "no layout.json in the scene folders"
+    return summary
+
+
+def _load_layout(scene_dir: Path) -> SceneLayout | None:
+    p = scene_dir / "layout.json"
+    if not p.is_file():
+        return None
+    try:
+        return SceneLayout.from_json(json.loads(p.read_text()))
+    except (OSError, json.JSONDecodeError, KeyError, ValueError) as e:
+        raise DataError(f"{p}: unreadable layout ({e})") from None
+
+
+def shared_codebook(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: int = 64) -> Codebook:
+    """A codebook fitted on an equal-sized random pool from each dataset."""
+    rng = make_rng(seed, "codebook")
+    pools = []
+    n = min([len(s.features) for s in summaries if len(s.features)] or [0])
+    n = min(n, POOL_PER_DATASET)
+    for s in summaries:
+        if len(s.features) == 0:
+            continue
+        pick = rng.choice(len(s.features), size=n, replace=False) if len(s.features) > n else np.arange(len(s.features))
+        pools.append(s.features[pick])
+    if not pools:
+        raise DataError("no instance with enough points in any dataset: cannot fit a shape codebook")
+    return fit_codebook(np.concatenate(pools), k=k, rng=rng)
+
+
+def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
+                  reference: RealismReference | None = None) -> dict:
+    """``{name: {"geometry_diversity", "context_complexity", "layout_score", "layout_realism", "scenes",
+    "instances", ...}}`` keyed by each dataset as the user named it (``"dataset"`` holds its
+    ``FORMAT:PATH`` form); a metric that cannot be computed is None, with the reason under
+    ``"notes"``. ``reference`` defaults to the shipped real-scan statistics."""
+    reference = reference if reference is not None else RealismReference.load()
+    out = {}
+    for s in summaries:
+        notes = {}
+        realism, realism_parts, why = realism_score(s.realism, reference)
+        if realism is None:
+            notes["layout_realism"] = why
+        gd = geometry_diversity(s.features, codebook) if len(s.features) else None
+        if gd is None:
+            notes["geometry_diversity"] = "no instance with enough points"
+        cc = context_complexity(s.scene_classes) if s.scene_classes else None
+        if cc is None:
+            notes["context_complexity"] = "no scenes"
+        ls = float(np.mean(s.layout_scores)) if s.layout_scores else None
+        if ls is None:
+            notes["layout_score"] = s.layout_reason or "no layouts"
+            log.info("%s: layout score not computed: %s", s.name, notes["layout_score"])
+        comps = None
+        if s.layout_components:
+            comps = {k: round(float(np.mean([c[k] for c in s.layout_components])), 4) for k in s.layout_components[0]}
+        row = {
+            "geometry_diversity": None if gd is None else round(gd, 4),
+            "context_complexity": None if cc is None else round(cc, 4),
+            "layout_score": None if ls is None else round(ls, 2),
+            "scenes": s.scenes,
+            "instances": s.instances,
+            "layout_components": comps,
+            "vlm_layout_score": round(float(np.mean(s.vlm_scores)), 2) if s.vlm_scores else None,
+            "layout_realism": realism,
+            "layout_realism_components": realism_parts or None,
+            "layout_realism_reference": reference.source,
+            "codes": len(codebook.centers),
+            "dataset": s.spec or s.name,
+        }
+        if notes:
+            row["notes"] = notes
+        out[s.name] = row
+    return out
+
+
+def short_labels(names: Sequence[str]) -> list[str]:
+    """Legend labels: each dataset's last path component when those are unique (the folders of one
+    comparison), else the names as given."""
+    tails = [Path(n.split(":", 1)[-1]).name or n for n in names]
+    return tails if len(set(tails)) == len(tails) else list(names)
+
+
+def plot_summaries(summaries: Sequence[DatasetSummary], codebook: Codebook, path: str | Path) -> None:
+    """A PNG: shape-code histograms, per-class max co-occurrence, per-scene layout scores."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(16, 4.6))
+    k = len(codebook.centers)
+    for s, label in zip(summaries, short_labels([s.name for s in summaries])):
+        if len(s.features):
+            p = np.bincount(codebook.assign(s.features), minlength=k) / len(s.features)
+            axes[0].plot(np.sort(p)[::-1], label=label, lw=1.6)
+        if s.scene_classes:
+            vals = sorted(v for _, v in per_class_max_cooccurrence(s.scene_classes).values())
+            axes[1].plot(np.linspace(0, 1, len(vals)), vals, label=label, lw=1.6)
+        if s.layout_scores:
+            axes[2].hist(s.layout_scores, bins=20, range=(0, 100), alpha=0.5, label=label)
+    axes[0].set(title="Geometry: shape-code shares (sorted)", xlabel="code rank", ylabel="share of instances")
+    axes[1].set(title="Context: max co-occurrence per class", xlabel="class quantile", ylabel="max P(other | class)")
+    axes[2].set(title="Layout: plausibility per scene", xlabel="score (0-100)", ylabel="scenes")
+    for a in axes:
+        a.grid(alpha=0.3)
+        if a.has_data():
+            a.legend(fontsize=8)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)

@@ -1,0 +1,92 @@
+"""Voxelisation of point clouds (numpy) and batch collation (torch).
+
+A scene's points are binned into ``voxel_size`` cubes; each voxel keeps the mean colour of its points
+and the majority instance id. ``inverse`` maps every input point to its voxel row, so per-voxel
+predictions go back to the reader's points exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...core.errors import DataError
+
+
+class VoxelGridError(DataError, ValueError):
+    """A scene too large for the voxel grid at this voxel size (a ValueError, as before)."""
+
+# ScanNet colour statistics (0-1 range), the usual normalisation of Mask3D-style models.
+COLOR_MEAN = np.array([0.47793125906962, 0.4303257521323044, 0.3749598901421883], dtype=np.float32)
+COLOR_STD = np.array([0.2834475483823543, 0.27566157565723015, 0.27018971370874995], dtype=np.float32)
+
+
+@dataclass(frozen=True)
+class VoxelScene:
+    """One voxelised scene.
+
+    coords (V, 3) int32 voxel indices (non-negative); feats (V, 3) float32 normalised RGB;
+    instance (V,) int32 majority instance id (-1 = none); inverse (N,) int64 voxel row of each point.
+    """
+
+    coords: np.ndarray
+    feats: np.ndarray
+    instance: np.ndarray
+    inverse: np.ndarray
+
+
+def voxelize(coord: np.ndarray, color: np.ndarray, instance: np.ndarray | None, voxel_size: float) -> VoxelScene:
+    """Bin ``coord`` (N, 3) float metres with ``color`` (N, 3) uint8/float 0-255 into voxels of ``voxel_size`` m."""
+    if coord.ndim != 2 or coord.shape[1] != 3 or len(coord) == 0:
+        raise ValueError(f"coord must be a non-empty (N, 3) array, got shape {coord.shape}")
+    if voxel_size <= 0:
+        raise ValueError(f"voxel_size must be positive, got {voxel_size}")
+    grid = np.floor(coord.astype(np.float64) / voxel_size).astype(np.int64)
+    grid -= grid.min(0)
+    if grid.max() >= 2 ** 15:
+        raise VoxelGridError(f"scene spans {grid.max()} voxels of {voxel_size} m along an axis; the limit is "
+                             f"{2 ** 15} (enlarge voxel_size or crop the scene)")
+    keys = (grid[:, 0] << 32) | (grid[:, 1] << 16) | grid[:, 2]
+    ukeys, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    v = len(ukeys)
+    coords = grid[first].astype(np.int32)
+    counts = np.bincount(inverse, minlength=v).astype(np.float64)
+    col = np.zeros((v, 3), dtype=np.float64)
+    np.add.at(col, inverse, color.astype(np.float64))
+    col = (col / counts[:, None] / 255.0).astype(np.float32)
+    feats = (col - COLOR_MEAN) / COLOR_STD
+    if instance is None:
+        inst = np.full(v, -1, dtype=np.int32)
+    else:
+        inst = majority_label(inverse, instance.astype(np.int64), v).astype(np.int32)
+    return VoxelScene(coords=coords, feats=feats.astype(np.float32), instance=inst, inverse=inverse.astype(np.int64))
+
+
+def majority_label(group: np.ndarray, label: np.ndarray, n_groups: int) -> np.ndarray:
+    """Most frequent ``label`` per ``group`` (ties: smallest label); ``(n_groups,) int64``."""
+    pairs, counts = np.unique(np.stack([group, label], 1), axis=0, return_counts=True)
+    order = np.lexsort((pairs[:, 1], -counts, pairs[:, 0]))
+    pairs = pairs[order]
+    first = np.ones(len(pairs), dtype=bool)
+    first[1:] = pairs[1:, 0] != pairs[:-1, 0]
+    out = np.full(n_groups, -1, dtype=np.int64)
+    out[pairs[first, 0]] = pairs[first, 1]
+    return out
+
+
+def instance_masks(instance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Ground-truth masks from per-voxel ids: ``(G, V) bool`` and the ids ``(G,) int64`` (ids >= 0)."""
+    ids = np.unique(instance[instance >= 0]).astype(np.int64)
+    return instance[None, :] == ids[:, None], ids
+
+
+def collate(scenes: list[VoxelScene], device: str = "cpu"):
+    """Concatenate voxel scenes into ``(coords (N, 4) int32, feats (N, 3) float32)`` torch tensors."""
+    import torch
+
+    coords = np.concatenate([np.concatenate([np.full((len(s.coords), 1), b, np.int32), s.coords], 1)
+                             for b, s in enumerate(scenes)])
+    feats = np.concatenate([s.feats for s in scenes])
+    return torch.from_numpy(coords).to(device), torch.from_numpy(feats).to(device)

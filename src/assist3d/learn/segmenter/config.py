@@ -1,0 +1,74 @@
+"""The CPU segmenter's configuration (pydantic, validated; stored inside every checkpoint as JSON).
+
+Defaults are the settings measured in ``docs/fidelity.md``: 5 cm voxels, geometry-only input, a
+4-level sparse residual U-Net with per-scene normalisation, foreground + centre-offset heads,
+offset-shifted connected components for instances.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field
+
+from ...config import Section, validate_config
+
+Channels = Annotated[int, Field(ge=4, le=1024)]
+Blocks = Annotated[int, Field(ge=1, le=8)]
+
+
+class NetConfig(Section):
+    """Backbone and heads."""
+
+    voxel_size: float = Field(0.05, gt=0.005, le=0.5, description="voxel edge in metres")
+    use_color: bool = Field(False, description="append RGB to the geometric input features")
+    stem_channels: int = Field(16, ge=4, le=256)
+    enc_channels: tuple[Channels, Channels, Channels, Channels] = Field((16, 32, 64, 96), description="4 to 1024 each")
+    enc_blocks: tuple[Blocks, Blocks, Blocks, Blocks] = Field((1, 1, 1, 1), description="1 to 8 each")
+    dec_channels: tuple[Channels, Channels, Channels, Channels] = Field((96, 64, 48, 48), description="4 to 1024 each")
+    dec_blocks: tuple[Blocks, Blocks, Blocks, Blocks] = Field((1, 1, 1, 1), description="1 to 8 each")
+    norm: Literal["scene", "batch"] = Field("scene", description="scene: per-scene statistics; batch: BatchNorm")
+
+
+class AugmentConfig(Section):
+    """Training augmentations (applied to every training scene, generated or real, alike)."""
+
+    crop_m: float = Field(6.0, ge=0.0, le=100.0, description="random square crop edge in metres (0 = whole scene)")
+    keep_min: float = Field(0.35, gt=0.0, le=1.0, description="lowest fraction of points kept (density matching)")
+    keep_max: float = Field(0.8, gt=0.0, le=1.0, description="highest fraction of points kept")
+    top_cut_p: float = Field(0.0, ge=0.0, le=1.0, description="probability of removing everything above a random "
+                             "height (real scans often miss upper walls and high shelves)")
+    top_cut_range: tuple[float, float] = Field((1.4, 3.0), description="height range of that cut, metres above the floor")
+    scale: float = Field(0.1, ge=0.0, le=0.5, description="uniform scale jitter +-")
+    tilt_deg: float = Field(1.0, ge=0.0, le=10.0, description="random tilt about x and y, +- degrees")
+    floor_shift: tuple[float, float] = Field((-0.08, 0.05), description="random z translation range, metres")
+    jitter: tuple[float, float] = Field((0.005, 0.02), description="Gaussian jitter sigma range, metres")
+    color_jitter: float = Field(0.2, ge=0.0, le=1.0, description="brightness/contrast jitter (colour input only)")
+    color_drop: float = Field(0.2, ge=0.0, le=1.0, description="probability of greying the colour (colour input only)")
+
+
+class ClusterConfig(Section):
+    """Instances from per-voxel predictions."""
+
+    fg_threshold: float = Field(0.5, gt=0.0, lt=1.0, description="foreground probability threshold")
+    radius: float = Field(0.07, gt=0.0, le=1.0, description="link radius on offset-shifted centres, metres")
+    min_voxels: int = Field(6, ge=1, le=100_000, description="drop clusters with fewer voxels")
+
+
+class OptimConfig(Section):
+    lr: float = Field(2e-3, gt=0.0, le=1.0, description="Adam peak learning rate (cosine decay to 1 %)")
+    weight_decay: float = Field(1e-4, ge=0.0, le=1.0)
+    batch_size: int = Field(2, ge=1, le=64, description="scenes per step")
+    offset_weight: float = Field(1.0, ge=0.0)
+    direction_weight: float = Field(0.5, ge=0.0)
+
+
+class SegmenterConfig(Section):
+    net: NetConfig = Field(default_factory=NetConfig)
+    augment: AugmentConfig = Field(default_factory=AugmentConfig)
+    cluster: ClusterConfig = Field(default_factory=ClusterConfig)
+    optim: OptimConfig = Field(default_factory=OptimConfig)
+
+
+def parse_segmenter_config(data: dict | None, source: str = "<dict>") -> SegmenterConfig:
+    return validate_config(SegmenterConfig, data, source=source, what="segmenter config")

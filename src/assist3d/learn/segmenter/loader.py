@@ -1,0 +1,102 @@
+"""The segmenter's data loader: each training step's batch of examples, built in order, optionally by
+worker processes ahead of the step that needs it.
+
+A step's batch is a pure function of ``(scenes, config, seed, step)``: the scenes it trains on and
+their crops, augmentations and voxels all come from ``numpy.random.default_rng([seed, step])``
+(:func:`build_batch`). Workers therefore change when a batch is built, never what it holds: a run
+with ``workers=0`` (built in the training process) and one with ``workers=N`` see byte-identical
+batches, and a run resumed at step ``k`` sees the batches an uninterrupted run would.
+
+Workers are ``torch.utils.data.DataLoader`` worker processes (example building is numpy and scipy
+code that holds the GIL for much of its time, so threads would not overlap it). The loader asks for
+steps in order and hands batches back in that order, with ``prefetch`` batches per worker in flight,
+so memory stays bounded whatever the budget. On a 2-core machine one worker overlaps example
+building with the network's step; on a GPU machine with many cores, more workers keep the GPU fed.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Iterator, Sequence
+
+import numpy as np
+from torch.utils.data import DataLoader, Dataset, Sampler
+
+from ...core.errors import ConfigError
+from .config import SegmenterConfig
+from .data import Example, Scene, make_example
+
+MAX_WORKERS = 64
+
+
+def build_batch(scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int, step: int) -> list[Example]:
+    """The examples of training step ``step``: ``batch_size`` scenes drawn with replacement, each
+    cropped, augmented and voxelised with the step's own random stream."""
+    rng = np.random.default_rng([seed, step])
+    picks = rng.integers(len(scenes), size=cfg.optim.batch_size)
+    return [make_example(scenes[int(i)], cfg, rng) for i in picks]
+
+
+class _Steps(Dataset):
+    """Item ``k`` is the batch of step ``k``."""
+
+    def __init__(self, scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int):
+        self.scenes, self.cfg, self.seed = scenes, cfg, seed
+
+    def __getitem__(self, step: int) -> list[Example]:
+        return build_batch(self.scenes, self.cfg, self.seed, step)
+
+
+class _From(Sampler):
+    """Steps ``start, start + 1, ...`` without end (the training loop decides when to stop)."""
+
+    def __init__(self, start: int):
+        self.start = start
+
+    def __iter__(self) -> Iterator[int]:
+        return itertools.count(self.start)
+
+
+def _as_is(batch: list[Example]) -> list[Example]:
+    return batch  # keep numpy arrays (the default collate would turn them into tensors)
+
+
+class BatchLoader:
+    """Batches of steps ``start, start + 1, ...`` in order; use as a context manager.
+
+    ``workers=0`` builds each batch when it is asked for; ``workers=N`` has ``N`` processes build
+    up to ``prefetch`` batches each ahead of the training step.
+    """
+
+    def __init__(self, scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int, start: int = 0, *,
+                 workers: int = 0, prefetch: int = 2):
+        if not (0 <= workers <= MAX_WORKERS):
+            raise ConfigError(f"loader workers {workers}: expected 0 to {MAX_WORKERS}")
+        if not scenes:
+            raise ConfigError("no training scenes")
+        self.next_step = start
+        self._data = _Steps(scenes, cfg, seed)
+        self._loader = DataLoader(self._data, batch_size=None, sampler=_From(start), num_workers=workers,
+                                  collate_fn=_as_is, prefetch_factor=max(1, prefetch) if workers else None)
+        self._it: Iterator[list[Example]] | None = None
+
+    def __enter__(self) -> "BatchLoader":
+        self._it = iter(self._loader)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        it, self._it = self._it, None
+        shutdown = getattr(it, "_shutdown_workers", None)  # stop worker processes now, not at garbage collection
+        if shutdown is not None:
+            shutdown()
+
+    def next(self) -> tuple[int, list[Example]]:
+        """The next step's index and its examples."""
+        if self._it is None:
+            raise RuntimeError("BatchLoader used outside its 'with' block")
+        step = self.next_step
+        self.next_step += 1
+        return step, next(self._it)

@@ -1,0 +1,203 @@
+"""``assist3d probe``: how good is a training set for real scans? Train the segmenter on it for a fixed
+budget, segment real scans zero-shot, score them with the ScanNet protocol.
+
+Output folder (resumable; a finished seed is never redone, an unfinished one resumes from its
+``last.pt``)::
+
+    DIR/probe.json            the request (training sets, eval sets, budget, config); a re-run must match
+    DIR/seed_K/last.pt        training state (safe checkpoint format, see checkpoint.py)
+    DIR/seed_K/model.pt       the trained model (weights only)
+    DIR/seed_K/pred/ID.npz    predictions per evaluation scene (masks, scores)
+    DIR/seed_K/result.json    metrics of the seed (written last: the seed's completion marker)
+    DIR/summary.json          runs, mean and std over seeds (the --json output)
+
+Metrics are pooled over all evaluation scenes like the benchmark; the bootstrap interval resamples
+scenes with replacement (1,000 draws, 2.5th to 97.5th percentile).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ...bench.data import open_dataset
+from ...core.errors import ConfigError, DataError
+from ...bench.evaluation.ap import METRIC_KEYS, SceneMatches, match_scene, summarize
+from ...bench.evaluation.predictions import save_predictions
+from ...core.fileio import write_json_atomic
+from .checkpoint import load_segmenter, save_segmenter
+from .config import SegmenterConfig
+from .data import Scene
+from .geometric import segment_geometric
+from .infer import segment_points
+from .train import Budget, train_segmenter
+
+log = logging.getLogger(__name__)
+
+RUN_KEYS: tuple[str, ...] = ("AP", "AP50", "AP25", "AR")
+BOOTSTRAP_DRAWS = 1000
+
+
+@dataclass(frozen=True)
+class ProbeRequest:
+    train: tuple[str, ...]
+    eval: tuple[str, ...]
+    budget: Budget
+    seeds: int
+    config: SegmenterConfig
+    max_train_scenes: int = 0
+
+    def as_dict(self) -> dict:
+        return {"train": list(self.train), "eval": list(self.eval), "budget": self.budget.as_dict(),
+                "seeds": self.seeds, "max_train_scenes": self.max_train_scenes,
+                "config": self.config.model_dump(mode="json")}
+
+
+def load_training_scenes(specs: Sequence[str], max_scenes: int = 0,
+                         progress: Callable[[int, int], None] | None = None) -> list[Scene]:
+    """Every scene of every spec (the first ``max_scenes`` of each when > 0), kept compactly in memory."""
+    datasets = [open_dataset(s) for s in specs]
+    jobs = [(ds, i) for ds in datasets for i in range(len(ds) if max_scenes <= 0 else min(max_scenes, len(ds)))]
+    scenes = []
+    for k, (ds, i) in enumerate(jobs):
+        sample = ds[i]
+        if len(sample) == 0:
+            log.warning("%s: scene %s has no points; skipped", ds.root, sample.scene_id)
+            continue
+        scenes.append(Scene.from_sample(sample))
+        if progress is not None:
+            progress(k + 1, len(jobs))
+    if not scenes:
+        raise DataError(f"no usable training scenes in {', '.join(specs)}")
+    return scenes
+
+
+def bootstrap(matches: Sequence[SceneMatches], seed: int = 0, draws: int = BOOTSTRAP_DRAWS) -> dict[str, list[float]]:
+    """2.5 / 97.5 percentile interval of each metric over scenes resampled with replacement."""
+    rng = np.random.default_rng(seed)
+    n = len(matches)
+    if n == 0:
+        return {}
+    vals = {k: [] for k in RUN_KEYS}
+    for _ in range(draws):
+        pick = rng.integers(n, size=n)
+        s = summarize([matches[i] for i in pick]).summary
+        for k in RUN_KEYS:
+            vals[k].append(s[k])
+    return {k: [float(np.nanpercentile(v, 2.5)), float(np.nanpercentile(v, 97.5))] for k, v in vals.items()}
+
+
+def _num(x: float) -> float | None:
+    return None if x is None or not np.isfinite(x) else round(float(x), 6)
+
+
+def evaluate_model(model_path: Path, eval_specs: Sequence[str], pred_dir: Path, *, method: str = "learned",
+                   on_scene: Callable[[int, int], None] | None = None) -> dict:
+    """Segment every scene of ``eval_specs``, write predictions, return metrics with per-scene figures."""
+    loaded = load_segmenter(model_path) if method == "learned" else None
+    datasets = [open_dataset(s) for s in eval_specs]
+    total = sum(len(d) for d in datasets)
+    matches: list[SceneMatches] = []
+    per_scene: dict[str, dict] = {}
+    seconds = 0.0
+    done = 0
+    for ds in datasets:
+        for sid in ds.scene_ids:
+            sample = ds.load(sid)
+            t0 = time.perf_counter()
+            if loaded is not None:
+                seg = segment_points(loaded.model, loaded.config, sample.coord, sample.color)
+            else:
+                seg = segment_geometric(sample.coord)
+            seconds += time.perf_counter() - t0
+            save_predictions(pred_dir / f"{sid}.npz", seg.masks, seg.scores)
+            m = match_scene(sample.instance, seg.masks, seg.scores, valid=sample.valid, scene_id=sid)
+            matches.append(m)
+            s = summarize([m])
+            per_scene[sid] = {**{k: _num(s[k]) for k in METRIC_KEYS}, "num_gt": s.num_gt, "num_pred": s.num_pred}
+            done += 1
+            if on_scene is not None:
+                on_scene(done, total)
+    overall = summarize(matches)
+    return {**{k: _num(overall[k]) for k in METRIC_KEYS}, "num_gt": overall.num_gt, "num_pred": overall.num_pred,
+            "scenes": len(matches), "predict_seconds": round(seconds, 2), "ci95": bootstrap(matches),
+            "per_scene": per_scene}
+
+
+def _check_request(out: Path, req: ProbeRequest) -> None:
+    path = out / "probe.json"
+    mine = req.as_dict()
+    if path.is_file():
+        try:
+            old = json.loads(path.read_text())
+        except (OSError, json.JSONDecodeError) as e:
+            raise DataError(f"{path}: unreadable ({e}); remove it or use another --out") from None
+        old_cmp = {k: v for k, v in old.items() if k != "seeds"}
+        new_cmp = {k: v for k, v in mine.items() if k != "seeds"}
+        if old_cmp != new_cmp:
+            diff = sorted(k for k in set(old_cmp) | set(new_cmp) if old_cmp.get(k) != new_cmp.get(k))
+            raise ConfigError(f"{out}: holds a probe with other settings ({', '.join(diff)} differ); "
+                              "use another --out to start a new probe")
+    write_json_atomic(path, mine)
+
+
+def summarise_runs(runs: list[dict]) -> dict:
+    out: dict = {"runs": runs, "mean": {}, "std": {}}
+    for k in (*RUN_KEYS, "train_seconds", "steps"):
+        vals = np.array([r[k] for r in runs if r.get(k) is not None], np.float64)
+        out["mean"][k] = _num(vals.mean()) if len(vals) else None
+        out["std"][k] = _num(vals.std(ddof=1)) if len(vals) > 1 else (0.0 if len(vals) == 1 else None)
+    return out
+
+
+def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", loader_workers: int = 0,
+              on_event: Callable[[str, dict], None] | None = None) -> dict:
+    """Train and evaluate ``req.seeds`` seeds into ``out_dir``; returns (and writes) the summary."""
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out {out}: exists and is not a folder")
+    out.mkdir(parents=True, exist_ok=True)
+    _check_request(out, req)
+    emit = on_event or (lambda kind, info: None)
+    scenes: list[Scene] | None = None
+    runs = []
+    for seed in range(req.seeds):
+        sdir = out / f"seed_{seed}"
+        result_path = sdir / "result.json"
+        if result_path.is_file():
+            runs.append(json.loads(result_path.read_text()))
+            emit("seed_done", {"seed": seed, "cached": True, **runs[-1]})
+            continue
+        model_path = sdir / "model.pt"
+        if not model_path.is_file():
+            if scenes is None:
+                emit("load_start", {})
+                scenes = load_training_scenes(req.train, req.max_train_scenes,
+                                              progress=lambda k, n: emit("load", {"done": k, "total": n}))
+            emit("train_start", {"seed": seed})
+            rec = train_segmenter(req.config, scenes, sdir, seed=seed, budget=req.budget,
+                                  meta={"train": list(req.train)}, device=device,
+                                  loader_workers=loader_workers,
+                                  on_step=lambda row: emit("step", {"seed": seed, **row}))
+            loaded = load_segmenter(rec.checkpoint)
+            save_segmenter(model_path, loaded.model, req.config, meta=loaded.meta)
+        meta = load_segmenter(model_path).meta
+        emit("eval_start", {"seed": seed})
+        metrics = evaluate_model(model_path, req.eval, sdir / "pred",
+                                 on_scene=lambda k, n: emit("eval", {"seed": seed, "done": k, "total": n}))
+        run = {"seed": seed, **{k: metrics[k] for k in RUN_KEYS}, "AR50": metrics["AR50"], "AR25": metrics["AR25"],
+               "train_seconds": round(float(meta.get("train_seconds", 0.0)), 1), "steps": int(meta.get("step", 0)),
+               "ci95": metrics["ci95"], "per_scene": metrics["per_scene"], "predict_seconds": metrics["predict_seconds"]}
+        write_json_atomic(result_path, run)
+        runs.append(run)
+        emit("seed_done", {"seed": seed, "cached": False, **run})
+    summary = summarise_runs(runs)
+    summary["request"] = req.as_dict()
+    write_json_atomic(out / "summary.json", summary)
+    return summary
