@@ -23,7 +23,7 @@ import torch
 from assist3d.bench.data import open_dataset
 from assist3d.bench.evaluation.ap import match_scene, summarize
 from assist3d.learn.segmenter.checkpoint import load_segmenter
-from assist3d.learn.segmenter.cluster import radius_components
+from assist3d.learn.segmenter.cluster import mask_nms, radius_components
 from assist3d.learn.segmenter.features import voxel_features, voxelize
 from assist3d.learn.segmenter.infer import predict_voxels
 
@@ -83,19 +83,6 @@ def _proposals(xyz: np.ndarray, rows: np.ndarray, radius: float, min_voxels: int
     return [rows[comp == c] for c in np.flatnonzero(sizes >= min_voxels)]
 
 
-def _nms(masks: np.ndarray, scores: np.ndarray, iou_max: float) -> np.ndarray:
-    m = masks.astype(np.float32)
-    inter = m @ m.T
-    area = m.sum(1)
-    iou = inter / (area[:, None] + area[None] - inter + 1e-9)
-    keep, suppressed = [], np.zeros(len(scores), bool)
-    for i in np.argsort(-scores, kind="stable"):
-        if not suppressed[i]:
-            keep.append(i)
-            suppressed |= iou[i] > iou_max
-    return np.asarray(keep, np.int64)
-
-
 def variant(d: dict, name: str) -> tuple[np.ndarray, np.ndarray]:
     parts = set(name.split("+"))
     fg = d["fg"].mean(0) if "tta" in parts else d["fg"][0]
@@ -116,7 +103,7 @@ def variant(d: dict, name: str) -> tuple[np.ndarray, np.ndarray]:
     size = mv.sum(1)
     score = (mv * fg).sum(1) / size * np.minimum(1.0, size / 40.0) ** 0.5
     if len(props) > 1 and parts & {"ms", "dual"}:
-        keep = _nms(mv, score, 0.3 if "nms3" in parts else 0.5)
+        keep = mask_nms(mv, score, 0.3 if "nms3" in parts else 0.5)
         mv, score = mv[keep], score[keep]
     return mv[:, d["inverse"]], score.astype(np.float32)
 

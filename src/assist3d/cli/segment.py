@@ -224,7 +224,9 @@ def segment_cmd(
     input_: str = typer.Argument(..., metavar="INPUT", help="a .ply (mesh or point cloud), an (N, 3|6|8) .npy, or FORMAT:PATH"),
     out: Path = typer.Option(..., "--out", "-o", help="output folder: <scene_id>.npz (masks, scores) and <scene_id>.ply"),
     checkpoint: Optional[Path] = typer.Option(None, "--checkpoint", help="a trained segmenter (default: the shipped model)"),
-    method: str = typer.Option("learned", "--method", help="learned (a model) or geometric (planes removed, connected components)"),
+    method: str = typer.Option("hybrid", "--method", help="hybrid (the model's instances and the geometric components, "
+                               "ranked by the model, snapped to superpoints), learned (the model's instances only) or "
+                               "geometric (planes removed, connected components; no model)"),
     png: bool = typer.Option(False, "--png", help="also write <scene_id>.png, a top view coloured by instance"),
     as_json: bool = typer.Option(False, "--json", help="print one JSON line per scene (instances, seconds, AP when GT is known)"),
     threads: int = typer.Option(0, "--threads", min=0, max=256, help="torch CPU threads (0 = all cores)"),
@@ -234,14 +236,14 @@ def segment_cmd(
     from ..bench.evaluation.predictions import save_predictions
     from ..bench.data.ply import write_ply
 
-    if method not in ("learned", "geometric"):
-        raise ConfigError(f"--method {method!r}: expected 'learned' or 'geometric'")
+    if method not in ("hybrid", "learned", "geometric"):
+        raise ConfigError(f"--method {method!r}: expected 'hybrid', 'learned' or 'geometric'")
     if method == "geometric" and checkpoint is not None:
-        raise ConfigError("--checkpoint is for --method learned; the geometric reference has no weights")
+        raise ConfigError("--checkpoint is for --method hybrid or learned; the geometric reference has no weights")
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out {out}: exists and is not a folder")
     loaded = None
-    if method == "learned":
+    if method != "geometric":
         _require_torch()
         import torch
 
@@ -260,7 +262,11 @@ def segment_cmd(
             raise DataError(f"{input_}: scene {shown(scene_id)} has no points")
         finite = usable_points(input_, scene_id, coord)
         sub_color = color[finite] if color is not None else None
-        if loaded is not None:
+        if loaded is not None and method == "hybrid":
+            from ..learn.segmenter.hybrid import segment_hybrid
+
+            seg = segment_hybrid(loaded.model, loaded.config, coord[finite], sub_color)
+        elif loaded is not None:
             from ..learn.segmenter.infer import segment_points
 
             seg = segment_points(loaded.model, loaded.config, coord[finite], sub_color)

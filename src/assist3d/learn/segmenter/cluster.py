@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import coo_matrix
+from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
@@ -60,3 +60,20 @@ def point_masks(labels: np.ndarray, inverse: np.ndarray, num_instances: int) -> 
     """``(K, N) bool`` point masks from voxel labels and each point's voxel row."""
     point_label = labels[inverse]
     return point_label[None, :] == np.arange(num_instances)[:, None]
+
+
+def mask_nms(masks: np.ndarray, scores: np.ndarray, iou_max: float = 0.5) -> np.ndarray:
+    """Indices of the masks kept by greedy non-maximum suppression, best score first: a mask is
+    dropped when its IoU with a kept, higher-scoring one exceeds ``iou_max``. ``masks`` (M, N) bool."""
+    if len(masks) == 0:
+        return np.zeros(0, np.int64)
+    sparse = csr_matrix(masks.astype(np.float32))
+    inter = (sparse @ sparse.T).toarray()
+    area = np.diag(inter)
+    iou = inter / np.maximum(area[:, None] + area[None, :] - inter, 1e-9)
+    keep, suppressed = [], np.zeros(len(scores), bool)
+    for i in np.argsort(-np.asarray(scores), kind="stable"):
+        if not suppressed[i]:
+            keep.append(i)
+            suppressed |= iou[i] > iou_max
+    return np.asarray(keep, np.int64)

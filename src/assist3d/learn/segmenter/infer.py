@@ -16,7 +16,8 @@ from .model import Segmenter
 @dataclass(frozen=True)
 class Segmentation:
     """``masks`` (M, N) bool over the input points, ``scores`` (M,) float32 descending, ``labels`` (N,)
-    int64 instance index per point (-1 = none; each point in at most one mask)."""
+    int64 instance index per point (-1 = none). Learned and geometric masks are disjoint; hybrid
+    masks may overlap, and ``labels`` then names the best-scoring mask holding the point."""
 
     masks: np.ndarray
     scores: np.ndarray

@@ -1,0 +1,93 @@
+"""Learned vs hybrid inference of the CPU segmenter over many trained models, on real scans
+(docs/fidelity.md, "Hybrid inference"). Each model's network runs once per scan; the geometric
+components and the superpoints do not depend on the model and are computed once per scan.
+
+    python scripts/hybrid_eval.py MODEL.pt [MODEL.pt ...] --out hybrid.json
+        [--eval array:../shared/data/real/dev --eval array:../shared/data/real/scannet_scene0451_01.npy]
+
+Rows: ``geometric`` and ``geometric+snap`` (no model; the control), then per model ``learned``
+(what ``assist3d probe`` scores) and ``hybrid`` (what ``assist3d segment`` does by default).
+AP50 is over the scans of the first --eval spec; each further spec is reported on its own.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from assist3d.bench.data import open_dataset
+from assist3d.bench.evaluation.ap import match_scene, summarize
+from assist3d.core.fileio import write_json_atomic
+from assist3d.learn.segmenter.checkpoint import load_segmenter
+from assist3d.learn.segmenter.cluster import cluster_voxels, point_masks
+from assist3d.learn.segmenter.features import voxel_features, voxelize
+from assist3d.learn.segmenter.geometric import segment_geometric
+from assist3d.learn.segmenter.hybrid import combine
+from assist3d.learn.segmenter.infer import predict_voxels
+from assist3d.learn.segmenter.superpoints import snap_masks, superpoints
+
+ROOM_CHARS = 9  # rescans of a room share the first 9 characters of their name
+
+
+def _metrics(matches: list) -> dict:
+    s = summarize(matches)
+    rooms = sorted({m.scene_id[:ROOM_CHARS] for m in matches})
+    per_room = {r: round(float(np.mean([summarize([m])["AP50"] for m in matches if m.scene_id.startswith(r)])), 4)
+                for r in rooms}
+    return {k: round(float(s[k]), 4) for k in ("AP", "AP50", "AP25", "AR")} | {"rooms": per_room}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("models", nargs="+")
+    ap.add_argument("--eval", action="append")
+    ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument("--threads", type=int, default=1)
+    a = ap.parse_args()
+    torch.set_num_threads(a.threads)
+    specs = a.eval or ["array:../shared/data/real/dev", "array:../shared/data/real/scannet_scene0451_01.npy"]
+    scans = []  # (group, scene_id, sample, components, segments)
+    for g, spec in enumerate(specs):
+        ds = open_dataset(spec)
+        for sid in ds.scene_ids:
+            s = ds.load(sid)
+            scans.append((g, sid, s, segment_geometric(s.coord).masks, superpoints(s.coord)))
+            print("prepared", sid, flush=True)
+
+    def score(preds: list) -> list[dict]:
+        groups: list[list] = [[] for _ in specs]
+        for (g, sid, s, _, _), (masks, scores) in zip(scans, preds):
+            groups[g].append(match_scene(s.instance, masks, scores, valid=s.valid, scene_id=sid))
+        return [_metrics(m) for m in groups]
+
+    result: dict = {"eval": specs, "control": {}, "models": {}}
+    geo = [segment_geometric(s.coord) for _, _, s, _, _ in scans]
+    result["control"]["geometric"] = score([(x.masks, x.scores) for x in geo])
+    result["control"]["geometric+snap"] = score([(snap_masks(x.masks, sc[4]), x.scores) for x, sc in zip(geo, scans)])
+    for path in a.models:
+        t0 = time.perf_counter()
+        loaded = load_segmenter(path)
+        cfg = loaded.config
+        learned, hybrid = [], []
+        for _, _, s, comps, segs in scans:
+            vox = voxelize(s.coord.astype(np.float32), cfg.net.voxel_size, s.color)
+            fg, off = predict_voxels(loaded.model, vox.coords, voxel_features(vox, use_color=cfg.net.use_color))
+            inst = cluster_voxels(vox.centres, fg, off.astype(np.float64), cfg.cluster)
+            learned.append((point_masks(inst.labels, vox.inverse, len(inst.scores)), inst.scores))
+            h = combine(vox, fg, off, cfg, comps, segs)
+            hybrid.append((h.masks, h.scores))
+        result["models"][path] = {"learned": score(learned), "hybrid": score(hybrid)}
+        r = result["models"][path]
+        ap50 = {k: " / ".join(f"{x['AP50']:.3f}" for x in v) for k, v in r.items()}
+        print(f"{path}: learned AP50 {ap50['learned']}, hybrid {ap50['hybrid']} ({time.perf_counter() - t0:.0f} s)",
+              flush=True)
+        write_json_atomic(a.out, result)
+    write_json_atomic(a.out, result)
+
+
+if __name__ == "__main__":
+    main()
