@@ -67,7 +67,7 @@ def mask_nms(masks: np.ndarray, scores: np.ndarray, iou_max: float = 0.5) -> np.
     dropped when its IoU with a kept, higher-scoring one exceeds ``iou_max``. ``masks`` (M, N) bool."""
     if len(masks) == 0:
         return np.zeros(0, np.int64)
-    sparse = csr_matrix(masks.astype(np.float32))
+    sparse = bool_rows_csr(masks)
     inter = (sparse @ sparse.T).toarray()
     area = np.diag(inter)
     iou = inter / np.maximum(area[:, None] + area[None, :] - inter, 1e-9)
@@ -77,3 +77,10 @@ def mask_nms(masks: np.ndarray, scores: np.ndarray, iou_max: float = 0.5) -> np.
             keep.append(i)
             suppressed |= iou[i] > iou_max
     return np.asarray(keep, np.int64)
+
+
+def bool_rows_csr(masks: np.ndarray) -> csr_matrix:
+    """``masks`` (M, N) bool as a float32 sparse matrix, built from the set entries only (a dense
+    float copy of M masks over a million points would take gigabytes)."""
+    rows, cols = np.nonzero(masks)
+    return csr_matrix((np.ones(len(rows), np.float32), (rows, cols)), shape=masks.shape)

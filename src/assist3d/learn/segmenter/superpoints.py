@@ -27,6 +27,7 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.spatial import cKDTree
 
+from .cluster import bool_rows_csr
 from .features import voxelize
 
 
@@ -124,7 +125,7 @@ def snap_masks(masks: np.ndarray, segments: np.ndarray, min_cover: float = 0.5) 
         return masks.copy()
     s = int(segments.max()) + 1
     member = csr_matrix((np.ones(n, np.float32), (segments, np.arange(n))), shape=(s, n))
-    covered = (csr_matrix(masks.astype(np.float32)) @ member.T).toarray()  # (M, S) points of each segment
+    covered = (bool_rows_csr(masks) @ member.T).toarray()  # (M, S) points of each segment
     keep = covered / np.bincount(segments, minlength=s)[None, :] > min_cover
     out = keep[:, segments]
     empty = ~out.any(1)
