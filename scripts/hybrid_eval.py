@@ -23,11 +23,10 @@ from assist3d.bench.data import open_dataset
 from assist3d.bench.evaluation.ap import match_scene, summarize
 from assist3d.core.fileio import write_json_atomic
 from assist3d.learn.segmenter.checkpoint import load_segmenter
-from assist3d.learn.segmenter.cluster import cluster_voxels, point_masks
 from assist3d.learn.segmenter.features import voxel_features, voxelize
 from assist3d.learn.segmenter.geometric import segment_geometric
 from assist3d.learn.segmenter.hybrid import combine
-from assist3d.learn.segmenter.infer import predict_voxels
+from assist3d.learn.segmenter.infer import instances, predict_voxels
 from assist3d.learn.segmenter.superpoints import snap_masks, superpoints
 
 ROOM_CHARS = 9  # rescans of a room share the first 9 characters of their name
@@ -50,12 +49,12 @@ def main() -> None:
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     specs = a.eval or ["array:../shared/data/real/dev", "array:../shared/data/real/scannet_scene0451_01.npy"]
-    scans = []  # (group, scene_id, sample, components, segments)
+    scans = []  # (group, scene_id, sample, geometric segmentation, superpoints)
     for g, spec in enumerate(specs):
         ds = open_dataset(spec)
         for sid in ds.scene_ids:
             s = ds.load(sid)
-            scans.append((g, sid, s, segment_geometric(s.coord).masks, superpoints(s.coord)))
+            scans.append((g, sid, s, segment_geometric(s.coord), superpoints(s.coord)))
             print("prepared", sid, flush=True)
 
     def score(preds: list) -> list[dict]:
@@ -65,20 +64,19 @@ def main() -> None:
         return [_metrics(m) for m in groups]
 
     result: dict = {"eval": specs, "control": {}, "models": {}}
-    geo = [segment_geometric(s.coord) for _, _, s, _, _ in scans]
-    result["control"]["geometric"] = score([(x.masks, x.scores) for x in geo])
-    result["control"]["geometric+snap"] = score([(snap_masks(x.masks, sc[4]), x.scores) for x, sc in zip(geo, scans)])
+    result["control"]["geometric"] = score([(geo.masks, geo.scores) for *_, geo, _ in scans])
+    result["control"]["geometric+snap"] = score([(snap_masks(geo.masks, segs), geo.scores) for *_, geo, segs in scans])
     for path in a.models:
         t0 = time.perf_counter()
         loaded = load_segmenter(path)
         cfg = loaded.config
         learned, hybrid = [], []
-        for _, _, s, comps, segs in scans:
+        for _, _, s, geo, segs in scans:
             vox = voxelize(s.coord.astype(np.float32), cfg.net.voxel_size, s.color)
             fg, off = predict_voxels(loaded.model, vox.coords, voxel_features(vox, use_color=cfg.net.use_color))
-            inst = cluster_voxels(vox.centres, fg, off.astype(np.float64), cfg.cluster)
-            learned.append((point_masks(inst.labels, vox.inverse, len(inst.scores)), inst.scores))
-            h = combine(vox, fg, off, cfg, comps, segs)
+            inst = instances(vox, fg, off, cfg.cluster)
+            h = combine(inst, vox, fg, geo.masks, segs)
+            learned.append((inst.masks, inst.scores))
             hybrid.append((h.masks, h.scores))
         result["models"][path] = {"learned": score(learned), "hybrid": score(hybrid)}
         r = result["models"][path]

@@ -33,6 +33,11 @@ def radius_components(xyz: np.ndarray, radius: float) -> np.ndarray:
     return connected_components(graph, directed=False)[1].astype(np.int64)
 
 
+def instance_score(mean_fg: np.ndarray, n_voxels: np.ndarray) -> np.ndarray:
+    """Mean foreground probability x ``min(1, voxels / 40) ** 0.5``: drifted fragments rank low."""
+    return mean_fg * np.minimum(1.0, n_voxels / 40.0) ** 0.5
+
+
 def cluster_voxels(centres: np.ndarray, fg_prob: np.ndarray, offset: np.ndarray, cfg: ClusterConfig) -> VoxelInstances:
     """Group foreground voxels into instances; score = mean foreground probability x a size factor.
 
@@ -48,7 +53,7 @@ def cluster_voxels(centres: np.ndarray, fg_prob: np.ndarray, offset: np.ndarray,
     sizes = np.bincount(comp)
     mean_fg = np.bincount(comp, weights=fg_prob[rows]) / np.maximum(sizes, 1)
     keep = np.flatnonzero(sizes >= cfg.min_voxels)
-    score = mean_fg[keep] * np.minimum(1.0, sizes[keep] / 40.0) ** 0.5
+    score = instance_score(mean_fg[keep], sizes[keep])
     order = np.argsort(-score, kind="stable")
     new_id = np.full(len(sizes), -1, np.int64)
     new_id[keep[order]] = np.arange(len(keep))

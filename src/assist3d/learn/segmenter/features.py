@@ -89,18 +89,23 @@ def floor_height(centres: np.ndarray, percentile: float = 2.0) -> float:
     return float(np.percentile(centres[:, 2], percentile)) if len(centres) else 0.0
 
 
+def neighbourhood_scatter(centres: np.ndarray, k: int, tree: cKDTree | None = None) -> np.ndarray:
+    """(V, 3, 3) scatter matrix (sum of outer products, centred) of each row's ``k`` nearest rows of
+    ``centres`` (V, 3); its smallest-eigenvalue eigenvector is the PCA normal."""
+    k = min(k, len(centres))
+    _, idx = (tree or cKDTree(centres)).query(centres, k=k)
+    nb = centres[idx.reshape(len(centres), k)]  # (V, k, 3)
+    nb = nb - nb.mean(1, keepdims=True)
+    return np.einsum("vki,vkj->vij", nb, nb)
+
+
 def shape_features(centres: np.ndarray, k: int = 12) -> np.ndarray:
     """``(V, 4)`` float32: |n_z|, linearity, planarity, scattering of each voxel's ``k`` nearest centres."""
     v = len(centres)
     out = np.zeros((v, 4), np.float32)
     if v < 3:
         return out
-    k = min(k, v)
-    _, idx = cKDTree(centres).query(centres, k=k)
-    nb = centres[idx]  # (V, k, 3)
-    nb = nb - nb.mean(1, keepdims=True)
-    cov = np.einsum("vki,vkj->vij", nb, nb) / k
-    w, vec = np.linalg.eigh(cov)  # ascending eigenvalues
+    w, vec = np.linalg.eigh(neighbourhood_scatter(centres, k) / min(k, v))  # ascending eigenvalues
     w = np.maximum(w, 0.0)
     l1 = np.maximum(w[:, 2], 1e-12)
     out[:, 0] = np.abs(vec[:, 2, 0])  # z component of the smallest eigenvector

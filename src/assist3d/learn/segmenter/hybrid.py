@@ -25,11 +25,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .cluster import cluster_voxels, mask_nms, point_masks
+from .cluster import instance_score, mask_nms
 from .config import SegmenterConfig
 from .features import Voxels, voxel_features, voxelize
 from .geometric import GeometricConfig, segment_geometric
-from .infer import Segmentation, predict_voxels
+from .infer import Segmentation, instances, predict_voxels
 from .model import Segmenter
 from .superpoints import SuperpointConfig, snap_masks, superpoints
 
@@ -45,19 +45,16 @@ def labels_from_masks(masks: np.ndarray) -> np.ndarray:
     return labels
 
 
-def combine(vox: Voxels, fg: np.ndarray, offset: np.ndarray, cfg: SegmenterConfig, components: np.ndarray,
-            segments: np.ndarray, min_cover: float = SuperpointConfig.min_cover) -> Segmentation:
-    """Steps 1-4 from the network outputs on ``vox`` (fg (V,), offset (V, 3)), the geometric
-    components (C, N) bool and the superpoint id (N,) of every point."""
-    inst = cluster_voxels(vox.centres, fg, offset.astype(np.float64), cfg.cluster)
-    learned = point_masks(inst.labels, vox.inverse, len(inst.scores))
+def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, components: np.ndarray, segments: np.ndarray,
+            min_cover: float = SuperpointConfig.min_cover) -> Segmentation:
+    """Steps 2-4: the network's instances ``learned`` (from :func:`infer.instances` on ``vox``), its
+    foreground probability ``fg`` (V,), the geometric components (C, N) bool and the superpoint id
+    (N,) of every point."""
     point_fg = fg[vox.inverse]
-    comp_scores = np.zeros(len(components), np.float64)
-    for i, m in enumerate(components):
-        n_vox = len(np.unique(vox.inverse[m]))
-        comp_scores[i] = point_fg[m].mean() * min(1.0, n_vox / 40.0) ** 0.5
-    masks = np.concatenate([learned, components])
-    scores = np.concatenate([inst.scores.astype(np.float64), comp_scores])
+    n_vox = np.array([len(np.unique(vox.inverse[m])) for m in components], np.float64)
+    mean_fg = np.array([point_fg[m].mean() for m in components], np.float64)
+    masks = np.concatenate([learned.masks, components])
+    scores = np.concatenate([learned.scores.astype(np.float64), instance_score(mean_fg, n_vox)])
     keep = mask_nms(masks, scores, NMS_IOU)
     masks, scores = masks[keep], scores[keep]
     if len(masks):
@@ -74,5 +71,5 @@ def segment_hybrid(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray, co
         color = np.full((len(coord), 3), 128, np.uint8)
     vox = voxelize(coord, cfg.net.voxel_size, color)
     fg, offset = predict_voxels(model, vox.coords, voxel_features(vox, use_color=cfg.net.use_color), device)
-    return combine(vox, fg, offset, cfg, segment_geometric(coord, geometric).masks, superpoints(coord, superpoint),
-                   superpoint.min_cover)
+    return combine(instances(vox, fg, offset, cfg.cluster), vox, fg, segment_geometric(coord, geometric).masks,
+                   superpoints(coord, superpoint), superpoint.min_cover)

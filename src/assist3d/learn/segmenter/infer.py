@@ -9,7 +9,7 @@ import torch
 
 from .cluster import cluster_voxels, point_masks
 from .config import ClusterConfig, SegmenterConfig
-from .features import voxel_features, voxelize
+from .features import Voxels, voxel_features, voxelize
 from .model import Segmenter
 
 
@@ -46,6 +46,11 @@ def segment_points(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray, co
     vox = voxelize(np.asarray(coord, np.float32), cfg.net.voxel_size, color)
     feats = voxel_features(vox, use_color=cfg.net.use_color)
     fg, offset = predict_voxels(model, vox.coords, feats, device)
-    inst = cluster_voxels(vox.centres, fg, offset.astype(np.float64), cluster or cfg.cluster)
+    return instances(vox, fg, offset, cluster or cfg.cluster)
+
+
+def instances(vox: Voxels, fg: np.ndarray, offset: np.ndarray, cluster: ClusterConfig) -> Segmentation:
+    """The network's instances over the points of ``vox`` from its outputs fg (V,) and offset (V, 3)."""
+    inst = cluster_voxels(vox.centres, fg, offset.astype(np.float64), cluster)
     masks = point_masks(inst.labels, vox.inverse, len(inst.scores))
     return Segmentation(masks=masks, scores=inst.scores, labels=inst.labels[vox.inverse])

@@ -28,7 +28,7 @@ from scipy.sparse import csr_matrix
 from scipy.spatial import cKDTree
 
 from .cluster import bool_rows_csr
-from .features import voxelize
+from .features import neighbourhood_scatter, voxelize
 
 
 @dataclass(frozen=True)
@@ -42,23 +42,13 @@ class SuperpointConfig:
     min_cover: float = 0.5  # snapping keeps a superpoint when a mask covers more than this share of it
 
 
-def _normals(xyz: np.ndarray, tree: cKDTree, k: int) -> np.ndarray:
-    """Unit PCA normal (smallest-eigenvalue direction of the k-neighbourhood) of every row."""
-    k = min(k, len(xyz))
-    _, nn = tree.query(xyz, k)
-    nn = nn.reshape(len(xyz), k)
-    p = xyz[nn] - xyz[nn].mean(1, keepdims=True)
-    _, vec = np.linalg.eigh(np.einsum("nki,nkj->nij", p, p))
-    return vec[:, :, 0]
-
-
 def _graph_segments(xyz: np.ndarray, cfg: SuperpointConfig) -> np.ndarray:
     """Felzenszwalb-Huttenlocher segments (0..S-1) of the rows of ``xyz`` (V, 3) float64."""
     n = len(xyz)
     if n < 3:
         return np.zeros(n, np.int64)
     tree = cKDTree(xyz)
-    nrm = _normals(xyz, tree, cfg.k_normal)
+    nrm = np.linalg.eigh(neighbourhood_scatter(xyz, cfg.k_normal, tree))[1][:, :, 0]  # PCA normals
     k = min(cfg.k_graph + 1, n)
     dist, nn = tree.query(xyz, k, distance_upper_bound=cfg.max_edge)
     src = np.repeat(np.arange(n), k - 1)
