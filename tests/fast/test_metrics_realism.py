@@ -97,3 +97,68 @@ def test_no_objects_gives_no_score_and_bad_input_is_refused():
 def test_shipped_reference_loads():
     ref = RealismReference.load()
     assert set(ref.quantiles) == set(STATS) and ref.objects > 50
+
+
+def test_matched_sample_removes_the_small_sample_penalty():
+    """A small sample of the reference's own distribution scores low (KS grows as n shrinks); a
+    large dataset subsampled to the same size scores like it, not like its full self."""
+    from assist3d.bench.metrics.realism import matched_sample
+
+    rng = np.random.default_rng(0)
+    ref_stats, big, small = RealismStats(), RealismStats(), RealismStats()
+    for st, n in ((ref_stats, 4000), (big, 4000), (small, 12)):
+        for k in STATS:
+            st.values[k] = rng.uniform(0, 1, n).tolist()
+        st.objects, st.scenes = n, n
+    ref = RealismReference.from_stats(ref_stats, "uniform")
+    full = realism_score(big, ref)[0]
+    alone = realism_score(small, ref)[0]
+    assert full > 95 and alone < 90  # same distribution, only the sample size differs
+    draws = [realism_score(matched_sample(big, small, np.random.default_rng(s)), ref)[0] for s in range(200)]
+    assert abs(np.mean(draws) - alone) < 6  # matched size: the same footing as the small sample
+    m = matched_sample(big, small, np.random.default_rng(1))
+    assert all(len(m.values[k]) == 12 for k in STATS) and m.objects == 12
+    assert set(m.values["height"]) <= set(big.values["height"])  # drawn from the data, not invented
+    with pytest.raises(DataError, match="wanted"):
+        matched_sample(small, big, rng)
+
+
+def test_realism_reference_script_scores_datasets_at_each_rooms_size(tmp_path, capsys):
+    """scripts/realism_reference.py --loro --score --matched: one row per dataset and held-out room,
+    seeded (the same output twice), scores in 0-100, and refused without --loro."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "realism_reference", Path(__file__).resolve().parents[2] / "scripts" / "realism_reference.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    rng = np.random.default_rng(3)
+
+    def write(folder, name, objects):
+        coord, inst = _room(objects, rng)
+        a = np.zeros((len(coord), 8), np.float32)
+        a[:, :3], a[:, 6], a[:, 7] = coord, np.where(inst > 0, 5, 1), inst  # semantic 5: an object class
+        (tmp_path / folder).mkdir(exist_ok=True)
+        np.save(tmp_path / folder / f"{name}.npy", a)
+
+    against_wall = [((0.5, 1.0), (0.6, 1.2, 0.8), 0, 0.0), ((2.5, 3.5), (1.0, 0.5, 0.9), 0, 0.0),
+                    ((4.5, 2.0), (0.5, 0.5, 1.0), 0, 0.0)]
+    for room in ("roomA0001", "roomB0001", "roomC0001"):
+        write("real", f"{room}_00", against_wall)
+    for k in range(3):
+        write("gen", f"scene_{k:06d}", [((1.0 + k, 2.0), (0.5, 0.5, 0.5), 30, 0.0), ((3.0, 1.5), (0.6, 0.4, 0.7), 10, 0.0),
+                                        ((2.0, 3.0), (0.4, 0.4, 0.4), 0, 0.0), ((4.0, 3.0), (0.5, 0.6, 0.5), 45, 0.0)])
+    argv = [f"array:{tmp_path / 'real'}", "--loro", "--score", f"array:{tmp_path / 'gen'}", "--matched", "5", "--json"]
+    outs = []
+    for _ in range(2):
+        assert script.main(argv) == 0
+        outs.append(json.loads(capsys.readouterr().out))
+    assert outs[0]["matched"] == outs[1]["matched"]
+    m = outs[0]["matched"]
+    assert m["draws"] == 5
+    row = m["datasets"][f"array:{tmp_path / 'gen'}"]
+    assert set(row["rooms"]) == {"roomA0001", "roomB0001", "roomC0001"}
+    assert all(0 <= v["mean"] <= 100 and v["std"] >= 0 for v in row["rooms"].values())
+    with pytest.raises(SystemExit):
+        script.main([f"array:{tmp_path / 'real'}", "--score", f"array:{tmp_path / 'gen'}", "--matched", "5"])

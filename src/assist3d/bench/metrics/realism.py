@@ -292,6 +292,26 @@ def realism_score(stats: RealismStats, reference: RealismReference) -> tuple[flo
     return round(100.0 * (1.0 - float(np.mean(list(ks.values())))), 2), ks, None
 
 
+def matched_sample(stats: RealismStats, like: RealismStats, rng: np.random.Generator) -> RealismStats:
+    """A random subsample of ``stats`` with as many values per statistic as ``like`` has.
+
+    The KS distance of a sample from a distribution grows as the sample shrinks (about
+    ``0.87 / sqrt(n)`` for a sample of the distribution itself), so a held-out real room of a dozen
+    objects and a generated dataset of thousands are not scored on the same footing. Scoring
+    ``matched_sample(generated, room, rng)`` against the room's reference puts them there. Values are
+    drawn without replacement, per statistic (scene statistics from the scene values, object
+    statistics from the pooled object values).
+    """
+    src, out = stats.arrays(), RealismStats()
+    for k in STATS:
+        n = len(like.values[k])
+        if n > len(src[k]):
+            raise DataError(f"matched sample: {n} values of {k} wanted, {len(src[k])} available")
+        out.values[k] = src[k][rng.choice(len(src[k]), size=n, replace=False)].tolist()
+    out.scenes, out.objects = like.scenes, like.objects
+    return out
+
+
 def dataset_stats(samples: Iterable[tuple[np.ndarray, np.ndarray]]) -> RealismStats:
     """Pooled statistics over ``(coord, instance)`` pairs."""
     total = RealismStats()
