@@ -69,18 +69,17 @@ def main(argv: list[str] | None = None) -> int:
         report["loro"] = rows
         scores = [v["layout_realism"] for v in rows.values() if v["layout_realism"] is not None]
         report["loro_mean"] = round(sum(scores) / len(scores), 2) if scores else None
+    scored = {spec: stats_of_dataset(spec, args.max_scenes) for spec in args.score}  # measured once, used twice
     if args.score:
         ref = RealismReference.from_stats(total, args.spec)
         report["scores"] = {}
-        for spec in args.score:
-            st = stats_of_dataset(spec, args.max_scenes)
+        for spec, st in scored.items():
             score, parts, why = realism_score(st, ref)
             report["scores"][spec] = {"layout_realism": score, "components": parts, "reason": why,
                                       "scenes": st.scenes, "objects": st.objects}
     if args.matched:
         report["matched"] = {"draws": args.matched, "datasets": {}}
-        for spec in args.score:
-            st = stats_of_dataset(spec, args.max_scenes)
+        for spec, st in scored.items():
             per_room = {}
             for i, (r, (held, ref_r)) in enumerate(folds.items()):
                 rng = np.random.default_rng([i, args.matched])  # the same draws for every dataset

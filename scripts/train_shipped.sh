@@ -21,12 +21,9 @@ ASSIST3D=${ASSIST3D:-assist3d}
 PYTHON=${PYTHON:-python}
 HERE=$(cd "$(dirname "$0")" && pwd)
 mkdir -p "$OUT"
-[[ -f "$OUT/data-s0/manifest.json" && -f "$OUT/data-s0.done" ]] || {
-  $ASSIST3D generate --out "$OUT/data-s0" --num-scenes "$N0" --seed 0 --preset assist3d --workers 2 --assets "$ASSETS"
-  touch "$OUT/data-s0.done"; }
-[[ -f "$OUT/data-s1/manifest.json" && -f "$OUT/data-s1.done" ]] || {
-  $ASSIST3D generate --out "$OUT/data-s1" --num-scenes "$N1" --seed 1 --preset assist3d --workers 2 --assets "$ASSETS"
-  touch "$OUT/data-s1.done"; }
+# generate skips the scenes a folder already holds, so a re-run only finishes what is missing
+$ASSIST3D generate --out "$OUT/data-s0" --num-scenes "$N0" --seed 0 --preset assist3d --workers 2 --assets "$ASSETS"
+$ASSIST3D generate --out "$OUT/data-s1" --num-scenes "$N1" --seed 1 --preset assist3d --workers 2 --assets "$ASSETS"
 $ASSIST3D probe --train "assist3d:$OUT/data-s0" --train "assist3d:$OUT/data-s1" --eval "array:$DEV" \
   --steps "$STEPS" --seeds 1 --out "$OUT/probe" --json > "$OUT/probe.json"
 $PYTHON "$HERE/hybrid_eval.py" "$OUT/probe/seed_0/model.pt" --eval "array:$DEV" --eval "array:$EXTRA" \
