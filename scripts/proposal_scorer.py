@@ -38,9 +38,10 @@ from assist3d.bench.data import open_dataset
 from assist3d.bench.evaluation.ap import match_scene, summarize
 from assist3d.core.fileio import write_json_atomic
 from assist3d.learn.segmenter.checkpoint import load_segmenter
-from assist3d.learn.segmenter.cluster import instance_score, mask_nms
+from assist3d.learn.segmenter.cluster import mask_nms
 from assist3d.learn.segmenter.features import floor_height, voxel_features, voxelize
 from assist3d.learn.segmenter.geometric import segment_geometric
+from assist3d.learn.segmenter.hybrid import proposals as hybrid_proposals
 from assist3d.learn.segmenter.infer import instances, predict_voxels
 from assist3d.learn.segmenter.superpoints import snap_masks, superpoints
 
@@ -84,11 +85,7 @@ def proposals(loaded, coord: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
     fg, off = predict_voxels(loaded.model, vox.coords, voxel_features(vox, use_color=cfg.net.use_color))
     inst = instances(vox, fg, off, cfg.cluster)
     comps = segment_geometric(coord).masks
-    point_fg = fg[vox.inverse]
-    n_vox = np.array([len(np.unique(vox.inverse[m])) for m in comps], np.float64)
-    mean_fg = np.array([point_fg[m].mean() for m in comps], np.float64)
-    masks = np.concatenate([inst.masks, comps])
-    score = np.concatenate([inst.scores.astype(np.float64), instance_score(mean_fg, n_vox)])
+    masks, score = hybrid_proposals(inst, vox, fg, comps)  # exactly what `assist3d segment` ranks
     learned = np.concatenate([np.ones(len(inst.masks)), np.zeros(len(comps))])
     snapped = snap_masks(masks, superpoints(coord), 0.5) if len(masks) else masks
     ok = snapped.sum(1) > 0

@@ -45,16 +45,24 @@ def labels_from_masks(masks: np.ndarray) -> np.ndarray:
     return labels
 
 
-def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, components: np.ndarray, segments: np.ndarray,
-            min_cover: float = SuperpointConfig.min_cover) -> Segmentation:
-    """Steps 2-4: the network's instances ``learned`` (from :func:`infer.instances` on ``vox``), its
-    foreground probability ``fg`` (V,), the geometric components (C, N) bool and the superpoint id
-    (N,) of every point."""
+def proposals(learned: Segmentation, vox: Voxels, fg: np.ndarray, components: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Steps 1-2: the network's instances ``learned`` (from :func:`infer.instances` on ``vox``) followed by
+    the geometric components (C, N) bool, each scored by the network's foreground probability ``fg``
+    (V,): masks (M, N) bool and scores (M,) float64, before suppression."""
     point_fg = fg[vox.inverse]
     n_vox = np.array([len(np.unique(vox.inverse[m])) for m in components], np.float64)
     mean_fg = np.array([point_fg[m].mean() for m in components], np.float64)
     masks = np.concatenate([learned.masks, components])
     scores = np.concatenate([learned.scores.astype(np.float64), instance_score(mean_fg, n_vox)])
+    return masks, scores
+
+
+def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, components: np.ndarray, segments: np.ndarray,
+            min_cover: float = SuperpointConfig.min_cover) -> Segmentation:
+    """Steps 2-4: the network's instances ``learned`` (from :func:`infer.instances` on ``vox``), its
+    foreground probability ``fg`` (V,), the geometric components (C, N) bool and the superpoint id
+    (N,) of every point."""
+    masks, scores = proposals(learned, vox, fg, components)
     keep = mask_nms(masks, scores, NMS_IOU)
     masks, scores = masks[keep], scores[keep]
     if len(masks):
