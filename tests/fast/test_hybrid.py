@@ -95,9 +95,12 @@ def test_shipped_model_hybrid_beats_learned_alone_and_the_reference_on_the_real_
 
     loaded = load_segmenter(shipped_model_path())
     s = open_dataset(f"array:{real_scan_path}")[0]
-    t0 = time.perf_counter()
+    # The bound (< 30 s on CPU) on the process's CPU time: summed over its threads it is at least
+    # the wall time an otherwise idle machine would take, and unlike wall time it does not grow when
+    # other jobs share the cores (a training run beside the tests once made this 54 s wall, 15 s idle).
+    t0 = time.process_time()
     hybrid = segment_hybrid(loaded.model, loaded.config, s.coord, s.color)
-    assert time.perf_counter() - t0 < 30
+    assert time.process_time() - t0 < 30
     learned = segment_points(loaded.model, loaded.config, s.coord, s.color)
     geo = segment_geometric(s.coord)
     ap50 = {name: summarize([match_scene(s.instance, x.masks, x.scores, valid=s.valid)])["AP50"]
