@@ -208,11 +208,10 @@ def main() -> None:
             learned = scorer.score(f)
             keep = mask_nms(masks, default, 0.5)  # the shipped recipe: NMS on raw masks, then snap
             rows["default"].append(match_scene(s.instance, snapped[keep], default[keep], valid=s.valid, scene_id=sid))
-            valid = np.ones(len(s.coord), bool) if s.valid is None else s.valid
-            gt = np.where(valid, s.instance, -1)
+            gt = s.instance if s.valid is None else np.where(s.valid, s.instance, -1)
+            true_iou = best_iou(snapped, gt)  # of every proposal, once
             # the default's masks ranked by their true IoU: what ranking alone could gain
-            true_iou = best_iou(snapped[keep], gt)
-            rows["oracle_rank"].append(match_scene(s.instance, snapped[keep], true_iou + 1e-3 * default[keep],
+            rows["oracle_rank"].append(match_scene(s.instance, snapped[keep], true_iou[keep] + 1e-3 * default[keep],
                                                    valid=s.valid, scene_id=sid))
             for k, n in classify(snapped[keep], default[keep], gt).items():
                 kinds[k] = kinds.get(k, 0) + n
@@ -220,7 +219,7 @@ def main() -> None:
             rows["scorer"].append(match_scene(s.instance, snapped[keep], learned[keep], valid=s.valid, scene_id=sid))
             corr["default"].append(default)
             corr["scorer"].append(learned)
-            corr["iou"].append(best_iou(snapped, np.where(valid, s.instance, -1)))
+            corr["iou"].append(true_iou)
         iou = np.concatenate(corr["iou"])
         corr["oracle_rank"] = corr["iou"]
         result["eval"][spec] = {k: {m: round(float(summarize(v)[m]), 3) for m in ("AP", "AP50", "AP25")}
