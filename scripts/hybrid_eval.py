@@ -6,7 +6,9 @@ components and the superpoints do not depend on the model and are computed once 
         [--eval array:../shared/data/real/dev --eval array:../shared/data/real/scannet_scene0451_01.npy]
 
 Rows: ``geometric`` and ``geometric+snap`` (no model; the control), then per model ``learned``
-(what ``assist3d probe`` scores) and ``hybrid`` (what ``assist3d segment`` does by default).
+(what ``assist3d probe`` scores), ``hybrid`` (what ``assist3d segment`` does by default),
+``hybrid_v1`` (the first hybrid recipe, without the fallback proposals) and ``hybrid+stability``
+(the stability ranking, measured and not adopted; see ``learn/segmenter/hybrid.py``).
 AP50 is over the scans of the first --eval spec; each further spec is reported on its own.
 """
 
@@ -25,11 +27,17 @@ from assist3d.core.fileio import write_json_atomic
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.features import voxel_features, voxelize
 from assist3d.learn.segmenter.geometric import segment_geometric
-from assist3d.learn.segmenter.hybrid import combine
+from assist3d.learn.segmenter.hybrid import HybridConfig, combine
 from assist3d.learn.segmenter.infer import instances, predict_voxels
 from assist3d.learn.segmenter.superpoints import snap_masks, superpoints
 
 ROOM_CHARS = 9  # rescans of a room share the first 9 characters of their name
+STABILITY_RADII = (0.05, 0.10)  # the multi-scale radii of docs/fidelity.md's "Inference variants" around 7 cm
+VARIANTS = {
+    "hybrid": HybridConfig(),
+    "hybrid_v1": HybridConfig(fallback_radius=None),
+    "hybrid+stability": HybridConfig(stability_radii=STABILITY_RADII),
+}
 
 
 def _metrics(matches: list) -> dict:
@@ -70,18 +78,20 @@ def main() -> None:
         t0 = time.perf_counter()
         loaded = load_segmenter(path)
         cfg = loaded.config
-        learned, hybrid = [], []
+        learned: list = []
+        hybrid: dict[str, list] = {name: [] for name in VARIANTS}
         for _, _, s, geo, segs in scans:
             vox = voxelize(s.coord.astype(np.float32), cfg.net.voxel_size, s.color)
             fg, off = predict_voxels(loaded.model, vox.coords, voxel_features(vox, use_color=cfg.net.use_color))
             inst = instances(vox, fg, off, cfg.cluster)
-            h = combine(inst, vox, fg, geo.masks, segs)
             learned.append((inst.masks, inst.scores))
-            hybrid.append((h.masks, h.scores))
-        result["models"][path] = {"learned": score(learned), "hybrid": score(hybrid)}
+            for name, variant in VARIANTS.items():
+                h = combine(inst, vox, fg, off, cfg.cluster, geo.masks, segs, hybrid=variant)
+                hybrid[name].append((h.masks, h.scores))
+        result["models"][path] = {"learned": score(learned)} | {name: score(p) for name, p in hybrid.items()}
         r = result["models"][path]
         ap50 = {k: " / ".join(f"{x['AP50']:.3f}" for x in v) for k, v in r.items()}
-        print(f"{path}: learned AP50 {ap50['learned']}, hybrid {ap50['hybrid']} ({time.perf_counter() - t0:.0f} s)",
+        print(f"{path}: AP50 " + ", ".join(f"{k} {v}" for k, v in ap50.items()) + f" ({time.perf_counter() - t0:.0f} s)",
               flush=True)
         write_json_atomic(a.out, result)
     write_json_atomic(a.out, result)

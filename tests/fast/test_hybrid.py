@@ -14,7 +14,10 @@ from assist3d.learn.segmenter.checkpoint import load_segmenter  # noqa: E402
 from assist3d.learn.segmenter.cluster import mask_nms  # noqa: E402
 from assist3d.learn.segmenter.config import parse_segmenter_config  # noqa: E402
 from assist3d.learn.segmenter.geometric import segment_geometric  # noqa: E402
-from assist3d.learn.segmenter.hybrid import labels_from_masks, segment_hybrid  # noqa: E402
+from assist3d.learn.segmenter.config import ClusterConfig  # noqa: E402
+from assist3d.learn.segmenter.features import voxelize  # noqa: E402
+from assist3d.learn.segmenter.hybrid import HybridConfig, combine, labels_from_masks, segment_hybrid  # noqa: E402
+from assist3d.learn.segmenter.infer import instances  # noqa: E402
 from assist3d.learn.segmenter.model import Segmenter  # noqa: E402
 from assist3d.learn.segmenter.superpoints import snap_masks, superpoints  # noqa: E402
 
@@ -72,6 +75,38 @@ def test_mask_nms_drops_the_lower_scored_duplicate_and_labels_take_the_best_mask
     assert keep.tolist() == [1, 2]
     labels = labels_from_masks(masks[keep])
     assert labels.tolist() == [0, 0, 0, 0, 0, 0, 0, 1, 1, -1]
+
+
+def test_fallback_proposals_split_touching_objects_below_the_first_proposals():
+    # two 30 cm blocks of 5 cm voxels; the offsets pull each block 20 % towards its centre (4 cm
+    # between neighbours) and block 1 towards block 0 until their shifted voxels are 6 cm apart:
+    # linked at 7 cm (one merged proposal), apart at the 5 cm fallback radius
+    cells = np.stack(np.meshgrid(np.arange(6), np.arange(6), np.arange(6), indexing="ij"), -1).reshape(-1, 3)
+    coord = np.concatenate([cells, cells + [7, 0, 0]]) * 0.05 + 0.025
+    truth = np.repeat([0, 1], len(cells))
+    vox = voxelize(coord, 0.05)
+    fg = np.full(len(vox), 0.9, np.float32)
+    truth_vox = np.empty(len(vox), np.int64)
+    truth_vox[vox.inverse] = truth  # one point per voxel
+    centre = np.stack([vox.centres[truth_vox == k].mean(0) for k in (0, 1)])[truth_vox]
+    offset = 0.2 * (centre - vox.centres)
+    offset[truth_vox == 1, 0] -= 0.09
+    cluster = ClusterConfig()
+    learned = instances(vox, fg, offset, cluster)
+    none = np.zeros((0, len(coord)), bool)
+    own = np.arange(len(coord))  # every point its own superpoint: snapping keeps masks as they are
+    first = combine(learned, vox, fg, offset, cluster, none, own, hybrid=HybridConfig(fallback_radius=None))
+    both = combine(learned, vox, fg, offset, cluster, none, own)
+    assert len(first.masks) == 1 and first.masks[0].all()  # the merge
+    # the first recipe's masks come first, in the same order, with their scores mapped monotonically
+    assert np.array_equal(both.masks[: len(first.masks)], first.masks)
+    assert np.allclose(both.scores[: len(first.scores)], (1 + first.scores) / 2)
+    assert (both.scores[len(first.scores):] < both.scores[len(first.scores) - 1]).all()
+    assert sorted(m.sum() for m in both.masks[1:]) == [len(cells), len(cells)]
+    assert {int(truth[m][0]) for m in both.masks[1:]} == {0, 1} and all(len(set(truth[m])) == 1 for m in both.masks[1:])
+    m = [summarize([match_scene(truth, s.masks, s.scores)]) for s in (first, both)]
+    assert (m[0]["AR50"], m[1]["AR50"]) == (0.0, 1.0)
+    assert m[0]["AP50"] == 0.0 < m[1]["AP50"]  # 1/3: the merge, a false positive, still ranks first
 
 
 def test_hybrid_on_a_toy_room_returns_ranked_consistent_masks_and_finds_the_boxes(room):

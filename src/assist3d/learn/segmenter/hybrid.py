@@ -1,5 +1,6 @@
 """Hybrid inference, the default of ``assist3d segment``: the network's instances plus the geometric
-reference's components, both ranked by the network, then snapped to superpoints.
+reference's components, both ranked by the network, fallback proposals ranked below them, then
+snapped to superpoints.
 
 1. the learned proposals (foreground voxels shifted by their offsets, linked within 7 cm) with
    their scores;
@@ -7,15 +8,25 @@ reference's components, both ranked by the network, then snapped to superpoints.
    the same way as learned ones: mean foreground probability of their points x
    ``min(1, voxels / 40) ** 0.5`` (5 cm voxels), so the network decides which of them look like
    objects;
-3. greedy non-maximum suppression over both sets (IoU 0.5; PointGroup keeps two proposal sets in
-   the same way);
-4. each kept mask snapped to superpoints (``superpoints.py``).
+3. fallback proposals: the network's instances linked at ``fallback_radius`` (5 cm), which split
+   objects that touch, ranked below every proposal of steps 1-2 (scores ``s / 2`` for them,
+   ``(1 + s) / 2`` for the others). Proposals ranked below all others only add points at the end
+   of the precision-recall curve and never move its earlier points, so under the ScanNet protocol
+   they cannot lower AP, AP50 or AP25 of a scan or of a dataset;
+4. greedy non-maximum suppression over all of them (IoU 0.5; PointGroup keeps two proposal sets in
+   the same way): a fallback proposal is dropped when it repeats one of steps 1-2;
+5. each kept mask snapped to superpoints (``superpoints.py``).
 
 The two proposal sources fail in different rooms (docs/fidelity.md: the network in sparse rooms
 whose objects stand apart, the components in cluttered ones), and snapping fixes ragged 5 cm
 boundaries. Measured with 28 trained models on the dev scans and on scene0451_01 (docs/fidelity.md,
-"Hybrid inference"). ``assist3d probe`` keeps the learned proposals alone: it measures training
-data, and the geometric proposals do not depend on it.
+"Hybrid inference" and "Fallback proposals and a stability ranking"). ``assist3d probe`` keeps the
+learned proposals alone: it measures training data, and the geometric proposals do not depend on it.
+
+``HybridConfig.stability_radii`` (off by default: measured, not adopted) multiplies the scores of
+steps 1-2 by ``0.5 + 0.5 x stability``, the mean over those radii of each proposal's best IoU with
+the network's instances linked at that radius (a persistence criterion, as in MSER or HDBSCAN): it
+helped the shipped model on the dev scans and hurt 12 of 28 models.
 
 Masks may overlap (a component can hold two learned instances without an IoU above 0.5 with
 either); ``labels`` gives each point the best-scoring mask that holds it.
@@ -23,10 +34,12 @@ either); ``labels`` gives each point the best-scoring mask that holds it.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from .cluster import instance_score, mask_nms
-from .config import SegmenterConfig
+from .cluster import bool_rows_csr, instance_score, mask_nms
+from .config import ClusterConfig, SegmenterConfig
 from .features import Voxels, voxel_features, voxelize
 from .geometric import GeometricConfig, segment_geometric
 from .infer import Segmentation, instances, predict_voxels
@@ -34,6 +47,18 @@ from .model import Segmenter
 from .superpoints import SuperpointConfig, snap_masks, superpoints
 
 NMS_IOU = 0.5
+
+
+@dataclass(frozen=True)
+class HybridConfig:
+    """``fallback_radius`` (metres; None: no fallback proposals) is step 3 of the module docstring;
+    ``fallback_radius=None`` gives the first hybrid recipe (network and geometric proposals, NMS,
+    snapping). ``stability_radii`` (metres, e.g. ``(0.05, 0.10)``) turns on the stability ranking
+    that was measured and not adopted."""
+
+    stability_radii: tuple[float, ...] = ()
+    fallback_radius: float | None = 0.05
+    nms_iou: float = NMS_IOU
 
 
 def labels_from_masks(masks: np.ndarray) -> np.ndarray:
@@ -48,22 +73,55 @@ def labels_from_masks(masks: np.ndarray) -> np.ndarray:
 def proposals(learned: Segmentation, vox: Voxels, fg: np.ndarray, components: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Steps 1-2: the network's instances ``learned`` (from :func:`infer.instances` on ``vox``) followed by
     the geometric components (C, N) bool, each scored by the network's foreground probability ``fg``
-    (V,): masks (M, N) bool and scores (M,) float64, before suppression."""
-    point_fg = fg[vox.inverse]
-    n_vox = np.array([len(np.unique(vox.inverse[m])) for m in components], np.float64)
-    mean_fg = np.array([point_fg[m].mean() for m in components], np.float64)
+    (V,): masks (M, N) bool and scores (M,) float64, before fallback proposals and suppression."""
     masks = np.concatenate([learned.masks, components])
-    scores = np.concatenate([learned.scores.astype(np.float64), instance_score(mean_fg, n_vox)])
+    scores = np.concatenate([learned.scores.astype(np.float64), network_score(components, vox, fg)])
     return masks, scores
 
 
-def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, components: np.ndarray, segments: np.ndarray,
-            min_cover: float = SuperpointConfig.min_cover) -> Segmentation:
-    """Steps 2-4: the network's instances ``learned`` (from :func:`infer.instances` on ``vox``), its
-    foreground probability ``fg`` (V,), the geometric components (C, N) bool and the superpoint id
-    (N,) of every point."""
+def network_score(masks: np.ndarray, vox: Voxels, fg: np.ndarray) -> np.ndarray:
+    """The network's score of point masks (M, N) bool: :func:`cluster.instance_score` of their points'
+    mean foreground probability and of their number of voxels."""
+    point_fg = fg[vox.inverse]
+    n_vox = np.array([len(np.unique(vox.inverse[m])) for m in masks], np.float64)
+    mean_fg = np.array([point_fg[m].mean() if m.any() else 0.0 for m in masks], np.float64)
+    return instance_score(mean_fg, n_vox)
+
+
+def best_iou(masks: np.ndarray, others: np.ndarray) -> np.ndarray:
+    """(M,) the highest IoU of each of ``masks`` (M, N) bool with one of ``others`` (K, N) bool (0 if K = 0)."""
+    if len(masks) == 0 or len(others) == 0:
+        return np.zeros(len(masks))
+    a, b = bool_rows_csr(masks), bool_rows_csr(others)
+    inter = (a @ b.T).toarray()
+    union = np.asarray(a.sum(1)).reshape(-1, 1) + np.asarray(b.sum(1)).reshape(1, -1) - inter
+    return (inter / np.maximum(union, 1.0)).max(1)
+
+
+def stability(masks: np.ndarray, vox: Voxels, fg: np.ndarray, offset: np.ndarray, cluster: ClusterConfig,
+              radii: tuple[float, ...]) -> np.ndarray:
+    """(M,) in [0, 1], the mean over ``radii`` of each mask's best IoU with the network's
+    instances linked at that radius (1 when ``radii`` is empty)."""
+    if not radii:
+        return np.ones(len(masks))
+    alt = [instances(vox, fg, offset, cluster.model_copy(update={"radius": r})).masks for r in radii]
+    return np.mean([best_iou(masks, a) for a in alt], axis=0)
+
+
+def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, offset: np.ndarray, cluster: ClusterConfig,
+            components: np.ndarray, segments: np.ndarray, min_cover: float = SuperpointConfig.min_cover,
+            hybrid: HybridConfig = HybridConfig()) -> Segmentation:
+    """Steps 2-5: the network's instances ``learned`` (from :func:`infer.instances` on ``vox`` with
+    ``cluster``), its foreground probability ``fg`` (V,) and offsets ``offset`` (V, 3), the geometric
+    components (C, N) bool and the superpoint id (N,) of every point."""
     masks, scores = proposals(learned, vox, fg, components)
-    keep = mask_nms(masks, scores, NMS_IOU)
+    if hybrid.stability_radii:
+        scores = scores * (0.5 + 0.5 * stability(masks, vox, fg, offset, cluster, hybrid.stability_radii))
+    if hybrid.fallback_radius is not None:
+        extra = instances(vox, fg, offset, cluster.model_copy(update={"radius": hybrid.fallback_radius}))
+        masks = np.concatenate([masks, extra.masks])
+        scores = np.concatenate([(1.0 + scores) / 2.0, extra.scores.astype(np.float64) / 2.0])
+    keep = mask_nms(masks, scores, hybrid.nms_iou)
     masks, scores = masks[keep], scores[keep]
     if len(masks):
         masks = snap_masks(masks, segments, min_cover)
@@ -72,12 +130,14 @@ def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, components: np.n
 
 def segment_hybrid(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None = None, *,
                    geometric: GeometricConfig = GeometricConfig(),
-                   superpoint: SuperpointConfig = SuperpointConfig(), device: str = "cpu") -> Segmentation:
+                   superpoint: SuperpointConfig = SuperpointConfig(), hybrid: HybridConfig = HybridConfig(),
+                   device: str = "cpu") -> Segmentation:
     """Segment one scan with the hybrid recipe: ``coord`` (N, 3) metres (z up), ``color`` (N, 3) uint8 or None."""
     coord = np.asarray(coord, np.float32)
     if cfg.net.use_color and color is None:
         color = np.full((len(coord), 3), 128, np.uint8)
     vox = voxelize(coord, cfg.net.voxel_size, color)
     fg, offset = predict_voxels(model, vox.coords, voxel_features(vox, use_color=cfg.net.use_color), device)
-    return combine(instances(vox, fg, offset, cfg.cluster), vox, fg, segment_geometric(coord, geometric).masks,
-                   superpoints(coord, superpoint), superpoint.min_cover)
+    return combine(instances(vox, fg, offset, cfg.cluster), vox, fg, offset, cfg.cluster,
+                   segment_geometric(coord, geometric).masks, superpoints(coord, superpoint), superpoint.min_cover,
+                   hybrid)
