@@ -1,9 +1,12 @@
-"""Shared fixtures: locations of real data (skipped cleanly when absent)."""
+"""Shared fixtures: locations of real data (skipped cleanly when absent), the repository's scripts."""
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from pathlib import Path
+from types import ModuleType
+from typing import Callable
 
 import pytest
 
@@ -35,3 +38,16 @@ def sh3d_dir() -> Path:
     if not SH3D_DIR.is_dir() or not any(SH3D_DIR.glob("*.sh3f")):
         pytest.skip("Sweet Home 3D furniture catalogs not installed (apt-get install sweethome3d-furniture)")
     return SH3D_DIR
+
+
+@pytest.fixture
+def load_script() -> Callable[[str], ModuleType]:
+    """``load_script("name")`` imports ``scripts/name.py`` (the scripts are not a package)."""
+
+    def load(name: str) -> ModuleType:
+        spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        return module
+
+    return load

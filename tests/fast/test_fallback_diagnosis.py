@@ -3,22 +3,11 @@ docs/fidelity.md."""
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 
 
-def _script():
-    spec = importlib.util.spec_from_file_location(
-        "fallback_diagnosis", Path(__file__).resolve().parents[2] / "scripts" / "fallback_diagnosis.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def test_classify_names_what_happened_to_each_object():
-    fd = _script()
+def test_classify_names_what_happened_to_each_object(load_script):
+    fd = load_script("fallback_diagnosis")
     n = 1000
     obj = np.zeros(n, bool)
     obj[:200] = True

@@ -123,16 +123,10 @@ def test_matched_sample_removes_the_small_sample_penalty():
         matched_sample(small, big, rng)
 
 
-def test_realism_reference_script_scores_datasets_at_each_rooms_size(tmp_path, capsys):
+def test_realism_reference_script_scores_datasets_at_each_rooms_size(tmp_path, capsys, load_script):
     """scripts/realism_reference.py --loro --score --matched: one row per dataset and held-out room,
     seeded (the same output twice), scores in 0-100, and refused without --loro."""
-    import importlib.util
-    from pathlib import Path
-
-    spec = importlib.util.spec_from_file_location(
-        "realism_reference", Path(__file__).resolve().parents[2] / "scripts" / "realism_reference.py")
-    script = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(script)
+    script = load_script("realism_reference")
     rng = np.random.default_rng(3)
 
     def write(folder, name, objects):

@@ -3,23 +3,12 @@ figures of docs/fidelity.md, and the scorer's fit."""
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import torch
 
 
-def _script():
-    spec = importlib.util.spec_from_file_location(
-        "proposal_scorer", Path(__file__).resolve().parents[2] / "scripts" / "proposal_scorer.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def test_classify_names_every_kind_of_prediction():
-    ps = _script()
+def test_classify_names_every_kind_of_prediction(load_script):
+    ps = load_script("proposal_scorer")
     # 1,000 points: object 0 on 0-299, object 1 on 300-599, void beyond
     inst = np.full(1000, -1)
     inst[:300], inst[300:600] = 0, 1
@@ -38,8 +27,8 @@ def test_classify_names_every_kind_of_prediction():
     assert out["true_positive"] == 1 and out["duplicate"] == 1
 
 
-def test_best_iou_skips_objects_under_100_points():
-    ps = _script()
+def test_best_iou_skips_objects_under_100_points(load_script):
+    ps = load_script("proposal_scorer")
     inst = np.full(500, -1)
     inst[:200], inst[200:260] = 0, 1   # object 1 has 60 points: not an object for the protocol
     masks = np.zeros((2, 500), bool)
@@ -48,8 +37,8 @@ def test_best_iou_skips_objects_under_100_points():
     assert np.allclose(ps.best_iou(masks, inst), [0.5, 0.0])
 
 
-def test_scorer_fit_ranks_by_the_target():
-    ps = _script()
+def test_scorer_fit_ranks_by_the_target(load_script):
+    ps = load_script("proposal_scorer")
     rng = np.random.default_rng(0)
     feats = rng.normal(size=(400, ps.NUM_FEATURES))
     iou = 1 / (1 + np.exp(-2 * feats[:, 0]))  # the target depends on the first feature only
