@@ -12,10 +12,9 @@ from assist3d.bench.evaluation.ap import match_scene, summarize  # noqa: E402
 from assist3d.learn.engine.toy import make_toy_scene  # noqa: E402
 from assist3d.learn.segmenter.checkpoint import load_segmenter  # noqa: E402
 from assist3d.learn.segmenter.cluster import mask_nms  # noqa: E402
-from assist3d.learn.segmenter.config import parse_segmenter_config  # noqa: E402
-from assist3d.learn.segmenter.geometric import segment_geometric  # noqa: E402
-from assist3d.learn.segmenter.config import ClusterConfig  # noqa: E402
+from assist3d.learn.segmenter.config import ClusterConfig, parse_segmenter_config  # noqa: E402
 from assist3d.learn.segmenter.features import voxelize  # noqa: E402
+from assist3d.learn.segmenter.geometric import segment_geometric  # noqa: E402
 from assist3d.learn.segmenter.hybrid import HybridConfig, combine, labels_from_masks, segment_hybrid  # noqa: E402
 from assist3d.learn.segmenter.infer import instances  # noqa: E402
 from assist3d.learn.segmenter.model import Segmenter  # noqa: E402

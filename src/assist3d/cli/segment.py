@@ -225,7 +225,8 @@ def segment_cmd(
     out: Path = typer.Option(..., "--out", "-o", help="output folder: <scene_id>.npz (masks, scores) and <scene_id>.ply"),
     checkpoint: Optional[Path] = typer.Option(None, "--checkpoint", help="a trained segmenter (default: the shipped model)"),
     method: str = typer.Option("hybrid", "--method", help="hybrid (the model's instances and the geometric components, "
-                               "ranked by the model, fallback proposals below them, snapped to superpoints), learned (the model's instances only) or "
+                               "ranked by the model, fallback proposals below them, snapped to superpoints), "
+                               "learned (the model's instances only) or "
                                "geometric (planes removed, connected components; no model)"),
     png: bool = typer.Option(False, "--png", help="also write <scene_id>.png, a top view coloured by instance"),
     as_json: bool = typer.Option(False, "--json", help="print one JSON line per scene (instances, seconds, AP when GT is known)"),
