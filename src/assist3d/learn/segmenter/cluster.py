@@ -72,16 +72,23 @@ def mask_nms(masks: np.ndarray, scores: np.ndarray, iou_max: float = 0.5) -> np.
     dropped when its IoU with a kept, higher-scoring one exceeds ``iou_max``. ``masks`` (M, N) bool."""
     if len(masks) == 0:
         return np.zeros(0, np.int64)
-    sparse = bool_rows_csr(masks)
-    inter = (sparse @ sparse.T).toarray()
-    area = np.diag(inter)
-    iou = inter / np.maximum(area[:, None] + area[None, :] - inter, 1e-9)
+    iou = pairwise_iou(masks, masks)
     keep, suppressed = [], np.zeros(len(scores), bool)
     for i in np.argsort(-np.asarray(scores), kind="stable"):
         if not suppressed[i]:
             keep.append(i)
             suppressed |= iou[i] > iou_max
     return np.asarray(keep, np.int64)
+
+
+def pairwise_iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(A, B) float32 IoU of every mask of ``a`` (A, N) bool with every mask of ``b`` (B, N) bool
+    (0 where both are empty), from one sparse product over their set entries."""
+    sa, sb = bool_rows_csr(a), bool_rows_csr(b)
+    inter = (sa @ sb.T).toarray()
+    area_a = np.diff(sa.indptr).astype(np.float32)
+    area_b = np.diff(sb.indptr).astype(np.float32)
+    return inter / np.maximum(area_a[:, None] + area_b[None, :] - inter, 1e-9)
 
 
 def bool_rows_csr(masks: np.ndarray) -> csr_matrix:

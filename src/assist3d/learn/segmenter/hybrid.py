@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cluster import bool_rows_csr, instance_score, mask_nms
+from .cluster import instance_score, mask_nms, pairwise_iou
 from .config import ClusterConfig, SegmenterConfig
 from .features import Voxels, voxel_features, voxelize
 from .geometric import GeometricConfig, segment_geometric
@@ -93,10 +93,7 @@ def best_iou(masks: np.ndarray, others: np.ndarray) -> np.ndarray:
     """(M,) the highest IoU of each of ``masks`` (M, N) bool with one of ``others`` (K, N) bool (0 if K = 0)."""
     if len(masks) == 0 or len(others) == 0:
         return np.zeros(len(masks))
-    a, b = bool_rows_csr(masks), bool_rows_csr(others)
-    inter = (a @ b.T).toarray()
-    union = np.asarray(a.sum(1)).reshape(-1, 1) + np.asarray(b.sum(1)).reshape(1, -1) - inter
-    return (inter / np.maximum(union, 1.0)).max(1)
+    return pairwise_iou(masks, others).max(1)
 
 
 def stability(masks: np.ndarray, vox: Voxels, fg: np.ndarray, offset: np.ndarray, cluster: ClusterConfig,
