@@ -43,6 +43,9 @@ class AugmentConfig(Section):
     tilt_deg: float = Field(1.0, ge=0.0, le=10.0, description="random tilt about x and y, +- degrees")
     floor_shift: tuple[float, float] = Field((-0.08, 0.05), description="random z translation range, metres")
     jitter: tuple[float, float] = Field((0.005, 0.02), description="Gaussian jitter sigma range, metres")
+    elastic: tuple[tuple[Annotated[float, Field(gt=0.0, le=10.0)], Annotated[float, Field(ge=0.0, le=1.0)]], ...] = Field(
+        (), max_length=4, description="smooth random warps, each (grid spacing m, displacement std m), applied in "
+        "order (real reconstructions are not the perfect planes and boxes of generated scenes); () = off")
     color_jitter: float = Field(0.2, ge=0.0, le=1.0, description="brightness/contrast jitter (colour input only)")
     color_drop: float = Field(0.2, ge=0.0, le=1.0, description="probability of greying the colour (colour input only)")
 
