@@ -210,3 +210,33 @@ def test_a_failing_scene_is_reported_and_retried_by_the_next_run(full_run, tmp_p
     run = generate_dataset(parse_config(TINY), out, range(3))
     assert run.skipped == [0, 2] and [m["index"] for m in run.generated] == [1] and run.errors == []
     assert dataset_bytes(out) == dataset_bytes(full_run[0])
+
+
+def test_filled_openings_are_labelled_objects_and_change_nothing_else(full_run, tmp_path):
+    out, _ = full_run
+    cfg = {**TINY, "room": {**TINY["room"], "fill_openings": True}}
+    filled = tmp_path / "filled"
+    generate_dataset(parse_config(cfg), filled, range(2), verify=True)
+    man = json.loads((filled / "manifest.json").read_text())
+    plain_classes = json.loads((out / "manifest.json").read_text())["classes"]
+    assert man["classes"][:len(plain_classes)] == plain_classes and {"door", "window"} <= set(man["classes"])
+    seen = set()
+    for i in range(2):
+        sid = scene_name(i)
+        assert next(e for e in man["scenes"] if e["id"] == sid)["check"]["ok"]  # ray labels agree with the mesh
+        lay = json.loads((filled / sid / "layout.json").read_text())
+        ref = json.loads((out / sid / "layout.json").read_text())
+        # the objects and their poses are those of the plain run: the fill draws from its own stream
+        assert lay["instances"] == ref["instances"]
+        openings = lay["room"]["openings"]
+        assert [{k: o[k] for k in ("kind", "wall", "offset", "width", "bottom", "top")} for o in openings] == \
+            ref["room"]["openings"]
+        inst = np.load(filled / sid / "instance.npy")
+        seg = np.load(filled / sid / "segment.npy")
+        for o in openings:
+            pts = inst == o["instance"]
+            seen.add(o["kind"])
+            if pts.any():
+                assert set(seg[pts].tolist()) == {man["classes"].index(o["kind"])}
+        assert len({o["instance"] for o in openings} & {x["id"] for x in lay["instances"]}) == 0
+    assert "door" in seen

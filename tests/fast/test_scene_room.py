@@ -76,3 +76,60 @@ def test_deterministic_and_bad_config():
         sample_room(RoomConfig(area_min=50, area_max=20), np.random.default_rng(0))
     with pytest.raises(ConfigError, match="height_min"):
         sample_room(RoomConfig(height_min=3.2, height_max=2.5), np.random.default_rng(0))
+
+
+def _filled(seed: int, clearance: float = 0.8):
+    from assist3d.scene.room import fill_openings
+
+    room = sample_room(RoomConfig(doors=(2, 2), windows=(2, 3)), np.random.default_rng(seed))
+    return room, fill_openings(room, 100, clearance, np.random.default_rng(seed))
+
+
+def _local(room, opening, pts):
+    """(along the wall from its start, depth into the room) of points ``pts`` (n, 3)."""
+    w = room_walls(room)[opening.wall]
+    u = (w[1] - w[0]) / np.linalg.norm(w[1] - w[0])
+    n = np.array([-u[1], u[0]])  # counter-clockwise polygon: the room is on the left
+    return (pts[:, :2] - w[0]) @ u, (pts[:, :2] - w[0]) @ n
+
+
+def test_filled_openings_sit_in_their_holes_and_open_doors_stay_in_the_clearance_zone():
+    from assist3d.core.contracts import Opening
+    from assist3d.scene.shell import opening_meshes
+
+    leaves = []
+    for seed in range(40):
+        room, filled = _filled(seed)
+        assert [o.instance for o in filled.openings] == list(range(100, 100 + len(room.openings)))
+        for plain, o in zip(room.openings, filled.openings):
+            assert (o.kind, o.wall, o.offset, o.width, o.bottom, o.top) == (
+                plain.kind, plain.wall, plain.offset, plain.width, plain.bottom, plain.top)
+            assert Opening.from_json(o.to_json()) == o
+        meshes = {i: (k, m) for i, k, m in opening_meshes(filled)}
+        assert sorted(meshes) == [o.instance for o in filled.openings]
+        for o in filled.openings:
+            kind, mesh = meshes[o.instance]
+            assert kind == o.kind and len(mesh.faces) >= 48
+            along, depth = _local(filled, o, mesh.vertices.astype(np.float64))
+            z = mesh.vertices[:, 2]
+            assert along.min() >= o.offset - o.width / 2 - 1e-4 and along.max() <= o.offset + o.width / 2 + 1e-4
+            assert z.min() >= o.bottom - 1e-4 and z.max() <= o.top + 1e-4
+            if o.kind == "window" or o.leaf_deg == 0:
+                # behind the wall plane but for a closed door's handle (3 cm into the clearance zone)
+                assert depth.max() <= (0.031 if o.kind == "door" else 1e-6)
+            else:
+                leaves.append(o.leaf_deg)
+                assert depth.max() <= 0.8 - 0.05 + 1e-4  # the far edge stays inside the clearance zone
+    assert len(leaves) > 10 and min(leaves) >= 15.0  # some doors are ajar, and then by at least 15 degrees
+    # a clearance zone too shallow for 15 degrees keeps every door closed
+    for seed in range(10):
+        _, filled = _filled(seed, clearance=0.2)
+        assert all(o.leaf_deg == 0 for o in filled.openings)
+
+
+def test_plain_openings_serialise_as_before():
+    from assist3d.core.contracts import Opening
+
+    o = Opening("door", 1, 2.0, 0.9, 0.0, 2.05)
+    assert set(o.to_json()) == {"kind", "wall", "offset", "width", "bottom", "top"}
+    assert Opening.from_json(o.to_json()) == o

@@ -52,6 +52,9 @@ class RoomConfig(Section):
     doors: tuple[int, int] = Field((1, 2), description="Inclusive range of door openings per room.")
     windows: tuple[int, int] = Field((0, 3), description="Inclusive range of window openings per room.")
     ceiling: bool = Field(False, description="Build a ceiling (real scans rarely capture it; off by default).")
+    fill_openings: bool = Field(False, description="Put a labelled object in every opening, as real scans annotate "
+                                "them: a door frame and leaf (closed or ajar into the door's clearance zone), a "
+                                "window frame with mullion and sill; classes 'door' and 'window'.")
 
 
 class SelectionConfig(Section):

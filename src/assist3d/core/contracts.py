@@ -174,7 +174,10 @@ class Opening:
     """A door or window cut into wall ``wall`` (index of the polygon edge from vertex i to i+1).
 
     ``offset`` is the distance of the opening's centre from the wall's start vertex along the
-    wall; ``bottom``/``top`` are heights above the floor.
+    wall; ``bottom``/``top`` are heights above the floor. A *filled* opening (``instance`` set,
+    ``room.fill_openings``) holds a labelled object, as real scans annotate doors and windows: a door
+    frame and leaf (``leaf_deg`` open into the room, hinged at the wall-start side when ``hinge`` is 0,
+    at the other side when 1) or a window frame; ``instance`` is its instance id.
     """
 
     kind: Literal["door", "window"]
@@ -183,14 +186,23 @@ class Opening:
     width: float
     bottom: float
     top: float
+    instance: int | None = None
+    leaf_deg: float = 0.0
+    hinge: int = 0
 
     def to_json(self) -> dict:
-        return {"kind": self.kind, "wall": self.wall, "offset": round(self.offset, 6), "width": round(self.width, 6),
-                "bottom": round(self.bottom, 6), "top": round(self.top, 6)}
+        d = {"kind": self.kind, "wall": self.wall, "offset": round(self.offset, 6), "width": round(self.width, 6),
+             "bottom": round(self.bottom, 6), "top": round(self.top, 6)}
+        if self.instance is not None:  # only filled openings carry these keys (older files stay byte-identical)
+            d.update(instance=int(self.instance), leaf_deg=round(self.leaf_deg, 6), hinge=int(self.hinge))
+        return d
 
     @staticmethod
     def from_json(d: dict) -> "Opening":
-        return Opening(d["kind"], int(d["wall"]), float(d["offset"]), float(d["width"]), float(d["bottom"]), float(d["top"]))
+        inst = d.get("instance")
+        return Opening(d["kind"], int(d["wall"]), float(d["offset"]), float(d["width"]), float(d["bottom"]), float(d["top"]),
+                       instance=None if inst is None else int(inst), leaf_deg=float(d.get("leaf_deg", 0.0)),
+                       hinge=int(d.get("hinge", 0)))
 
 
 @dataclass(frozen=True)

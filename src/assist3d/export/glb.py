@@ -12,7 +12,7 @@ import numpy as np
 from ..assets.catalog import Catalog
 from ..core.contracts import MeshData, SceneLayout
 from ..core.fileio import write_bytes_atomic
-from ..scene.assemble import instance_meshes
+from ..scene.assemble import labelled_meshes
 from ..scene.shell import build_shell
 
 log = logging.getLogger(__name__)
@@ -36,14 +36,14 @@ def _colored(mesh: MeshData):
 
 
 def export_glb(layout: SceneLayout, catalog: Catalog, path: str | Path) -> None:
-    """Write the scene as binary glTF: one mesh node per instance named ``instance_<id>`` and one
-    per room surface named ``background_<name>`` (floor, wall_0, ..., ceiling), vertices in the
+    """Write the scene as binary glTF: one mesh node per instance (filled openings included) named
+    ``instance_<id>`` and one per room surface named ``background_<name>`` (floor, wall_0, ..., ceiling), vertices in the
     world frame of the poses (node transforms are identity), per-face colours as vertex colours
     (a vertex is duplicated where faces of different colours meet). Written atomically."""
     import trimesh
 
     scene = trimesh.Scene()
-    for ident, mesh in instance_meshes(layout, catalog):
+    for ident, _, mesh in labelled_meshes(layout, catalog):
         name = f"instance_{ident}"
         scene.add_geometry(_colored(mesh), node_name=name, geom_name=name)
     for name, mesh in build_shell(layout.room):

@@ -63,6 +63,16 @@ class SceneJob:
     verify: bool = False
 
 
+def scene_classes(catalog, cfg: GenerateConfig) -> tuple[str, ...]:
+    """The class list a point's ``segment`` indexes: the catalog's classes, then ``door`` and ``window``
+    when ``room.fill_openings`` is on and the catalog lacks them (appended, so the catalog's indices
+    stay as they are)."""
+    classes = class_list(catalog)
+    if cfg.room.fill_openings:
+        classes += tuple(k for k in ("door", "window") if k not in classes)
+    return classes
+
+
 class SceneGenerator:
     """Everything one process needs to generate scenes: the config and the opened catalog."""
 
@@ -71,7 +81,7 @@ class SceneGenerator:
         if threads is not None:
             self.cfg = cfg.model_copy(update={"render": cfg.render.model_copy(update={"threads": threads})})
         self.catalog = open_catalog_for(cfg.assets)
-        self.classes = class_list(self.catalog)
+        self.classes = scene_classes(self.catalog, cfg)
 
     @property
     def assets_label(self) -> str:
@@ -284,7 +294,7 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
         classes, assets_label = gen.classes, gen.assets_label
     else:
         cat = open_catalog_for(cfg.assets)
-        classes = class_list(cat)
+        classes = scene_classes(cat, cfg)
         assets_label = str(getattr(cat, "root", "") or cfg.assets.library or "procedural")
         make_planner(cfg)  # says once, here, which planner the workers use
         del cat

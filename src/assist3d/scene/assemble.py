@@ -13,11 +13,11 @@ from ..assets.catalog import Catalog
 from ..core.contracts import MeshData, SceneLayout, SceneMesh
 from ..core.errors import AssetError
 from .geometry import transform_points
-from .shell import build_shell
+from .shell import build_shell, opening_meshes
 
 log = logging.getLogger(__name__)
 
-__all__ = ["assemble_scene", "instance_meshes"]
+__all__ = ["assemble_scene", "instance_meshes", "labelled_meshes"]
 
 
 def instance_meshes(layout: SceneLayout, catalog: Catalog) -> list[tuple[int, MeshData]]:
@@ -33,22 +33,29 @@ def instance_meshes(layout: SceneLayout, catalog: Catalog) -> list[tuple[int, Me
     return out
 
 
+def labelled_meshes(layout: SceneLayout, catalog: Catalog) -> list[tuple[int, str, MeshData]]:
+    """(instance id, class, world mesh) of every labelled object: the layout's instances, then the
+    objects filling the room's openings (``room.fill_openings``; classes ``door`` and ``window``)."""
+    by_id = {i.id: i for i in layout.instances}
+    out = [(ident, by_id[ident].class_name, mesh) for ident, mesh in instance_meshes(layout, catalog)]
+    return out + opening_meshes(layout.room)
+
+
 def assemble_scene(layout: SceneLayout, catalog: Catalog, classes: Sequence[str]) -> SceneMesh:
-    """The whole scene as one mesh: instances (face_instance = instance id, face_segment =
+    """The whole scene as one mesh: instances and filled openings (face_instance = instance id, face_segment =
     ``classes.index(class)`` or -1 for a class not in the list, face_part = instance id) followed
     by the room shell (face_instance = face_segment = -1, face_part = -(k + 1) for background part
     k named ``background_names[k]``)."""
     class_index = {c: i for i, c in enumerate(classes)}
     verts, faces, colors, inst_ids, segs, parts = [], [], [], [], [], []
     offset = 0
-    by_id = {i.id: i for i in layout.instances}
-    for ident, mesh in instance_meshes(layout, catalog):
+    for ident, class_name, mesh in labelled_meshes(layout, catalog):
         nf = len(mesh.faces)
         verts.append(mesh.vertices)
         faces.append(mesh.faces + offset)
         colors.append(mesh.face_colors)
         inst_ids.append(np.full(nf, ident, np.int32))
-        segs.append(np.full(nf, class_index.get(by_id[ident].class_name, -1), np.int32))
+        segs.append(np.full(nf, class_index.get(class_name, -1), np.int32))
         parts.append(np.full(nf, ident, np.int32))
         offset += len(mesh.vertices)
     names = []

@@ -38,7 +38,7 @@ from ..planning.relations import GroupPlan, Planner, PlanRequest, review_plan
 from ..planning.rules import RulePlanner
 from ..core.records import PLAN_COUNTERS
 from ..core.rng import make_rng
-from .room import sample_room
+from .room import fill_openings, sample_room
 from .selection import Selection, select_objects
 
 log = logging.getLogger(__name__)
@@ -278,6 +278,9 @@ def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_inde
             stats[k] = int(run.plan_stats[k])
     if run.plan_stats.get("llm_seconds"):
         run.timing["llm_seconds"] = round(float(run.plan_stats["llm_seconds"]), 4)  # wall time: kept with timings
+    if cfg.room.fill_openings:  # its own random stream: every other draw of the scene is unchanged
+        first = max((inst.id for inst in run.instances), default=0) + 1
+        room = fill_openings(room, first, cfg.layout.door_clearance, make_rng(seed, "openings"))
     seconds = time.perf_counter() - t0
     log.debug("layout seed %d: %d placed, %d dropped, %.3f s", seed, len(run.instances), len(run.dropped), seconds)
     return SceneLayout(room=room, instances=tuple(run.instances), dropped=tuple(run.dropped), seed=int(seed),

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import logging
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -144,3 +145,28 @@ def sample_room(cfg: RoomConfig, rng: np.random.Generator) -> Room:
     height = round(float(rng.uniform(cfg.height_min, cfg.height_max)), 6)
     openings = _place_openings(polygon, height, cfg, rng)
     return Room(polygon=tuple(polygon), height=height, openings=openings, ceiling=cfg.ceiling)
+
+
+DOOR_CLOSED_P = 0.4  # probability that a filled door is closed
+DOOR_MIN_OPEN_DEG = 15.0  # an ajar door is open at least this far
+LEAF_MARGIN = 0.05  # m kept between an open leaf's far edge and the end of the door's clearance zone
+
+
+def fill_openings(room: Room, first_id: int, door_clearance: float, rng: np.random.Generator) -> Room:
+    """``room`` with every opening filled (``room.fill_openings``): instance ids ``first_id``,
+    ``first_id + 1``, ... in opening order; each door hinged at a random side and closed (probability
+    0.4) or ajar into the room at a uniform angle from 15 degrees up to where the leaf still ends
+    ``LEAF_MARGIN`` inside the door's clearance zone (placement keeps that zone free, so an open leaf
+    never meets an object); closed when the zone is too shallow for 15 degrees."""
+    out = []
+    for k, o in enumerate(room.openings):
+        leaf, hinge = 0.0, 0
+        if o.kind == "door":
+            hinge = int(rng.integers(2))
+            reach = (door_clearance - LEAF_MARGIN) / max(o.width, 1e-6)
+            max_deg = math.degrees(math.asin(min(1.0, reach))) if reach > 0 else 0.0
+            if rng.random() >= DOOR_CLOSED_P and max_deg >= DOOR_MIN_OPEN_DEG:
+                leaf = round(float(rng.uniform(DOOR_MIN_OPEN_DEG, max_deg)), 6)
+        out.append(replace(o, instance=first_id + k, leaf_deg=leaf, hinge=hinge))
+    return replace(room, openings=tuple(out))
+

@@ -13,7 +13,20 @@ FLOOR_COLOR = (156, 134, 110)
 WALL_COLOR = (222, 218, 208)
 CEILING_COLOR = (240, 240, 236)
 
-__all__ = ["build_shell", "FLOOR_COLOR", "WALL_COLOR", "CEILING_COLOR"]
+__all__ = ["build_shell", "opening_meshes", "FLOOR_COLOR", "WALL_COLOR", "CEILING_COLOR"]
+
+# filled openings (``room.fill_openings``): frames sit in the hole, behind the wall plane, so that
+# nothing but an open door leaf (inside the clearance zone placement keeps free) enters the room
+FRAME = 0.05  # m, width of a door or window frame member
+DOOR_FRAME_DEPTH = 0.10  # m behind the wall plane
+LEAF_THICKNESS = 0.04  # m
+LEAF_RECESS = 0.01  # m, a closed leaf's room-side face behind the wall plane
+WINDOW_DEPTH = (0.02, 0.10)  # m behind the wall plane: frame members between these depths
+SILL_DEPTH = 0.12  # m, the bottom member reaches this deep (the sill)
+MULLION_MIN_WIDTH = 0.9  # m, wider windows get a central mullion
+FRAME_COLORS = ((236, 236, 230), (205, 195, 175), (120, 86, 60))
+LEAF_COLORS = ((236, 236, 230), (172, 122, 80), (120, 86, 60), (150, 150, 152))
+HANDLE_COLOR = (170, 170, 175)
 
 
 def _mesh(vertices: np.ndarray, faces: np.ndarray, color: tuple[int, int, int]) -> MeshData:
@@ -92,3 +105,81 @@ def _orient_inward(mesh: MeshData, normal: np.ndarray) -> MeshData:
     flip = n[:, :2] @ normal < 0
     f[flip] = f[flip][:, [0, 2, 1]]
     return MeshData(mesh.vertices.copy(), f, mesh.face_colors.copy())
+
+
+def _box(origin: np.ndarray, ex: np.ndarray, ey: np.ndarray, ez: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (8, 3) and outward-facing triangles (12, 3) of the box origin + [0,1] ex + [0,1] ey
+    + [0,1] ez (edge vectors, any orientation)."""
+    corners = np.array([origin + i * ex + j * ey + k * ez for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    tris = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
+    centre = corners.mean(0)
+    v = corners[tris]
+    n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    flip = np.einsum("ij,ij->i", n, v.mean(1) - centre) < 0
+    tris[flip] = tris[flip][:, [0, 2, 1]]
+    return corners, tris
+
+
+def _boxes_mesh(boxes: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int]]]) -> MeshData:
+    verts, faces, colors = [], [], []
+    for b, (origin, ex, ey, ez, color) in enumerate(boxes):
+        v, f = _box(origin, ex, ey, ez)
+        verts.append(v)
+        faces.append(f + 8 * b)
+        colors.append(np.tile(np.array(color, np.uint8), (len(f), 1)))
+    return MeshData(np.concatenate(verts).astype(np.float32), np.concatenate(faces).astype(np.int32),
+                    np.concatenate(colors))
+
+
+def opening_meshes(room: Room) -> list[tuple[int, str, MeshData]]:
+    """(instance id, class, mesh) of every filled opening of ``room`` (``Opening.instance`` set), in
+    the world frame: a door is its frame (two jambs and a head, ``DOOR_FRAME_DEPTH`` deep behind the
+    wall plane), its leaf (closed just behind the wall plane or turned ``leaf_deg`` into the room
+    about its hinge) and a handle; a window is its frame (sides, head, a deeper bottom member as the
+    sill) and, when wider than ``MULLION_MIN_WIDTH``, a central mullion. No glass: depth sensors see
+    through it. Colours come from small palettes, picked by instance id."""
+    walls = wall_segments(room)
+    out = []
+    for o in room.openings:
+        if o.instance is None or not 0 <= o.wall < len(walls.length):
+            continue
+        u = np.append(walls.direction[o.wall], 0.0)
+        n = np.append(walls.normal[o.wall], 0.0)
+        z = np.array([0.0, 0.0, 1.0])
+        p0 = np.append(walls.start[o.wall], 0.0)
+
+        def at(s: float, d: float, h: float) -> np.ndarray:
+            return p0 + u * s + n * d + z * h
+
+        a, b = o.offset - o.width / 2, o.offset + o.width / 2
+        frame = FRAME_COLORS[o.instance % len(FRAME_COLORS)]
+        if o.kind == "door":
+            dd = DOOR_FRAME_DEPTH
+            boxes = [(at(a, -dd, 0.0), u * FRAME, n * dd, z * o.top, frame),
+                     (at(b - FRAME, -dd, 0.0), u * FRAME, n * dd, z * o.top, frame),
+                     (at(a + FRAME, -dd, o.top - FRAME), u * (b - a - 2 * FRAME), n * dd, z * FRAME, frame)]
+            sign = 1.0 if o.hinge == 0 else -1.0
+            t = np.deg2rad(o.leaf_deg)
+            e = np.cos(t) * sign * u + np.sin(t) * n  # along the leaf, from the hinge
+            m = -np.cos(t) * n + np.sin(t) * sign * u  # across the leaf, away from the room
+            gap = 0.003
+            length = b - a - 2 * FRAME - 2 * gap
+            hinge = at(a + FRAME + gap if o.hinge == 0 else b - FRAME - gap, -LEAF_RECESS, 0.01)
+            tall = o.top - FRAME - 0.01 - gap
+            boxes.append((hinge, e * length, m * LEAF_THICKNESS, z * tall, LEAF_COLORS[o.instance % len(LEAF_COLORS)]))
+            grip = hinge + e * (length - 0.16) + z * (min(1.0, 0.5 * tall) - 0.015)
+            boxes.append((grip, e * 0.12, -m * 0.04, z * 0.03, HANDLE_COLOR))  # on the room side of the leaf
+        else:
+            d0, d1 = WINDOW_DEPTH
+            depth = n * (d1 - d0)
+            boxes = [(at(a, -d1, o.bottom), u * FRAME, depth, z * (o.top - o.bottom), frame),
+                     (at(b - FRAME, -d1, o.bottom), u * FRAME, depth, z * (o.top - o.bottom), frame),
+                     (at(a + FRAME, -d1, o.top - FRAME), u * (b - a - 2 * FRAME), depth, z * FRAME, frame),
+                     (at(a + FRAME, -SILL_DEPTH, o.bottom), u * (b - a - 2 * FRAME), n * SILL_DEPTH, z * FRAME, frame)]
+            if o.width > MULLION_MIN_WIDTH:
+                boxes.append((at(o.offset - FRAME / 2, -d1, o.bottom + FRAME), u * FRAME, depth,
+                              z * (o.top - o.bottom - 2 * FRAME), frame))
+        out.append((int(o.instance), o.kind, _boxes_mesh(boxes)))
+    return out
+
