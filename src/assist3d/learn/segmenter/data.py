@@ -3,7 +3,8 @@
 Every training scene, generated or real, goes through the same steps; the augmentations model what
 differs between a rendered scene and a real reconstruction (docs/fidelity.md): point density (a
 random fraction of the points is kept), floors that are neither flat nor at z = 0 (tilt, height
-shift), sensor noise (jitter), and the usual rotation, mirror and scale.
+shift), sensor noise (jitter), and the usual rotation, mirror and scale; optionally smooth elastic
+warps (off by default: measured, not adopted, docs/fidelity.md).
 """
 
 from __future__ import annotations
