@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.interpolate import RegularGridInterpolator
+from scipy.ndimage import gaussian_filter
 
 from ...core.contracts import PointSample
 from ..engine.augment import rotation_matrix
@@ -96,9 +98,6 @@ def elastic_warp(xyz: np.ndarray, spacing: float, sigma: float, rng: np.random.G
     without tearing, and the offset targets are computed after the warp."""
     if sigma <= 0 or len(xyz) == 0:
         return xyz
-    from scipy.interpolate import RegularGridInterpolator
-    from scipy.ndimage import gaussian_filter
-
     lo = xyz.min(0) - 2 * spacing
     shape = np.ceil((xyz.max(0) + 2 * spacing - lo) / spacing).astype(int) + 1
     axes = tuple(lo[a] + spacing * np.arange(shape[a]) for a in range(3))
