@@ -200,9 +200,9 @@ class Opening:
     @staticmethod
     def from_json(d: dict) -> "Opening":
         inst = d.get("instance")
-        return Opening(d["kind"], int(d["wall"]), float(d["offset"]), float(d["width"]), float(d["bottom"]), float(d["top"]),
-                       instance=None if inst is None else int(inst), leaf_deg=float(d.get("leaf_deg", 0.0)),
-                       hinge=int(d.get("hinge", 0)))
+        return Opening(d["kind"], int(d["wall"]), float(d["offset"]), float(d["width"]), float(d["bottom"]),
+                       float(d["top"]), instance=None if inst is None else int(inst),
+                       leaf_deg=float(d.get("leaf_deg", 0.0)), hinge=int(d.get("hinge", 0)))
 
 
 @dataclass(frozen=True)

@@ -37,9 +37,10 @@ def _colored(mesh: MeshData):
 
 def export_glb(layout: SceneLayout, catalog: Catalog, path: str | Path) -> None:
     """Write the scene as binary glTF: one mesh node per instance (filled openings included) named
-    ``instance_<id>`` and one per room surface named ``background_<name>`` (floor, wall_0, ..., ceiling), vertices in the
-    world frame of the poses (node transforms are identity), per-face colours as vertex colours
-    (a vertex is duplicated where faces of different colours meet). Written atomically."""
+    ``instance_<id>`` and one per room surface named ``background_<name>`` (floor, wall_0, ...,
+    ceiling), vertices in the world frame of the poses (node transforms are identity), per-face
+    colours as vertex colours (a vertex is duplicated where faces of different colours meet).
+    Written atomically."""
     import trimesh
 
     scene = trimesh.Scene()

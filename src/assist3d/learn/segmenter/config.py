@@ -15,6 +15,8 @@ from ...config import Section, validate_config
 
 Channels = Annotated[int, Field(ge=4, le=1024)]
 Blocks = Annotated[int, Field(ge=1, le=8)]
+Spacing = Annotated[float, Field(gt=0.0, le=10.0)]  # metres
+Displacement = Annotated[float, Field(ge=0.0, le=1.0)]  # metres
 
 
 class NetConfig(Section):
@@ -43,7 +45,7 @@ class AugmentConfig(Section):
     tilt_deg: float = Field(1.0, ge=0.0, le=10.0, description="random tilt about x and y, +- degrees")
     floor_shift: tuple[float, float] = Field((-0.08, 0.05), description="random z translation range, metres")
     jitter: tuple[float, float] = Field((0.005, 0.02), description="Gaussian jitter sigma range, metres")
-    elastic: tuple[tuple[Annotated[float, Field(gt=0.0, le=10.0)], Annotated[float, Field(ge=0.0, le=1.0)]], ...] = Field(
+    elastic: tuple[tuple[Spacing, Displacement], ...] = Field(
         (), max_length=4, description="smooth random warps, each (grid spacing m, displacement std m), applied in "
         "order (real reconstructions are not the perfect planes and boxes of generated scenes); () = off")
     color_jitter: float = Field(0.2, ge=0.0, le=1.0, description="brightness/contrast jitter (colour input only)")
