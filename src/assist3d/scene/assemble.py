@@ -42,9 +42,9 @@ def labelled_meshes(layout: SceneLayout, catalog: Catalog) -> list[tuple[int, st
 
 
 def assemble_scene(layout: SceneLayout, catalog: Catalog, classes: Sequence[str]) -> SceneMesh:
-    """The whole scene as one mesh: instances and filled openings (face_instance = instance id, face_segment =
-    ``classes.index(class)`` or -1 for a class not in the list, face_part = instance id) followed
-    by the room shell (face_instance = face_segment = -1, face_part = -(k + 1) for background part
+    """The whole scene as one mesh: instances and filled openings (face_instance = instance id,
+    face_segment = ``classes.index(class)`` or -1 for a class not in the list, face_part = instance
+    id) followed by the room shell (face_instance = face_segment = -1, face_part = -(k + 1) for background part
     k named ``background_names[k]``)."""
     class_index = {c: i for i, c in enumerate(classes)}
     verts, faces, colors, inst_ids, segs, parts = [], [], [], [], [], []
