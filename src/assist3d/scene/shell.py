@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import mapbox_earcut
 import numpy as np
+from trimesh import creation
 
 from ..core.contracts import MeshData, Room
 from .geometry import room_polygon, wall_segments
@@ -109,16 +110,12 @@ def _orient_inward(mesh: MeshData, normal: np.ndarray) -> MeshData:
 
 def _box(origin: np.ndarray, ex: np.ndarray, ey: np.ndarray, ez: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Vertices (8, 3) and outward-facing triangles (12, 3) of the box origin + [0,1] ex + [0,1] ey
-    + [0,1] ez (edge vectors, any orientation)."""
-    corners = np.array([origin + i * ex + j * ey + k * ez for i in (0, 1) for j in (0, 1) for k in (0, 1)])
-    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
-    tris = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
-    centre = corners.mean(0)
-    v = corners[tris]
-    n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
-    flip = np.einsum("ij,ij->i", n, v.mean(1) - centre) < 0
-    tris[flip] = tris[flip][:, [0, 2, 1]]
-    return corners, tris
+    + [0,1] ez (edge vectors, any orientation: trimesh flips the triangles of a mirrored frame)."""
+    t = np.eye(4)
+    t[:3, :3] = np.column_stack([ex, ey, ez])
+    t[:3, 3] = origin + (ex + ey + ez) / 2
+    box = creation.box(extents=(1.0, 1.0, 1.0), transform=t)
+    return np.asarray(box.vertices), np.asarray(box.faces)
 
 
 def _boxes_mesh(boxes: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, tuple[int, int, int]]]) -> MeshData:
