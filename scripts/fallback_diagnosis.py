@@ -1,7 +1,7 @@
 """Where hybrid inference loses real objects (docs/fidelity.md, "Fallback proposals"): every ground-truth
 object of the real scans, classified by the prediction that overlaps it best.
 
-    python scripts/fallback_diagnosis.py [--checkpoint MODEL.pt] [--recipe first|default]
+    python scripts/fallback_diagnosis.py [--checkpoint MODEL.pt] [--recipe first|default|learned]
         [--eval array:../shared/data/real/dev] [--json out.json]
 
 Per object (>= 100 points, ScanNet protocol): ``matched`` (IoU > 0.5), ``partial`` (the best mask lies
@@ -10,7 +10,8 @@ mask also holds other objects or structure), ``inside-others`` (at least half of
 of other objects) or ``uncovered``. For the unmatched objects it also counts how many the union of
 the masks lying mostly on them (precision > 0.5) would match: what joining fragments could gain.
 ``--recipe first`` is hybrid inference without the fallback proposals (the recipe these figures
-were first taken with), ``default`` what ``assist3d segment`` does.
+were first taken with), ``default`` what ``assist3d segment`` does, ``learned`` the network's own
+instances (what ``assist3d probe`` scores).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import torch
 from assist3d.bench.data import open_dataset
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.hybrid import HybridConfig, segment_hybrid
+from assist3d.learn.segmenter.infer import segment_points
 from assist3d.learn.segmenter.shipped import shipped_model_path
 
 MIN_GT_POINTS = 100  # ScanNet's minimum instance size
@@ -56,7 +58,7 @@ def classify(masks: np.ndarray, obj: np.ndarray) -> tuple[str, bool]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--checkpoint", default=None)
-    ap.add_argument("--recipe", choices=("first", "default"), default="first")
+    ap.add_argument("--recipe", choices=("first", "default", "learned"), default="first")
     ap.add_argument("--eval", default="array:../shared/data/real/dev")
     ap.add_argument("--json", default=None)
     a = ap.parse_args()
@@ -69,7 +71,10 @@ def main() -> None:
     joinable = 0
     for sid in ds.scene_ids:
         s = ds.load(sid)
-        seg = segment_hybrid(loaded.model, loaded.config, s.coord, s.color, hybrid=recipe)
+        if a.recipe == "learned":
+            seg = segment_points(loaded.model, loaded.config, s.coord, s.color)
+        else:
+            seg = segment_hybrid(loaded.model, loaded.config, s.coord, s.color, hybrid=recipe)
         inst = np.where(s.valid, s.instance, -1)
         ids, n = np.unique(inst[inst >= 0], return_counts=True)
         for i in ids[n >= MIN_GT_POINTS]:
