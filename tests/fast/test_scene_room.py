@@ -114,7 +114,7 @@ def test_filled_openings_sit_in_their_holes_and_open_doors_stay_in_the_clearance
             tri = v[mesh.faces]  # every box closed and facing out: each one's signed volume is positive
             signed = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6
             assert (signed.reshape(-1, 12).sum(1) > 1e-9).all()
-            along, depth = _local(filled, o, mesh.vertices.astype(np.float64))
+            along, depth = _local(filled, o, v)
             z = mesh.vertices[:, 2]
             assert along.min() >= o.offset - o.width / 2 - 1e-4 and along.max() <= o.offset + o.width / 2 + 1e-4
             assert z.min() >= o.bottom - 1e-4 and z.max() <= o.top + 1e-4
