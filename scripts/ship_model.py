@@ -1,6 +1,6 @@
-"""Copy a trained segmenter into the package as the shipped model (float16 weights, < 5 MB).
+"""Copy a trained segmenter into the package as the shipped model (float16 or int8 weights, < 5 MB).
 
-    python scripts/ship_model.py PROBE_DIR/seed_K/model.pt [--note TEXT]
+    python scripts/ship_model.py PROBE_DIR/seed_K/model.pt [--precision float16|int8] [--note TEXT]
 
 Refuses a model whose training sets are not all generated (``assist3d:`` specs): the shipped model
 is trained on generated data only. Records the training sets, steps and seconds in its metadata.
@@ -21,6 +21,8 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("model", type=Path)
     ap.add_argument("--note", default="")
+    ap.add_argument("--precision", choices=("float16", "int8"), default="float16",
+                    help="int8: blockwise int8 weights, for a network whose float16 file is over the cap")
     args = ap.parse_args()
     loaded = load_segmenter(args.model)
     train = loaded.meta.get("train", [])
@@ -28,14 +30,14 @@ def main() -> None:
         raise SystemExit(f"{args.model}: trained on {train}; the shipped model must be trained on generated data only")
     meta = {"train_data": "generated only", "train": [Path(s.split(':', 1)[1]).name for s in train],
             "steps": loaded.meta.get("step"), "train_seconds": loaded.meta.get("train_seconds"),
-            "seed": loaded.meta.get("seed"), "note": args.note}
+            "seed": loaded.meta.get("seed"), "precision": args.precision, "note": args.note}
     dest = Path(__file__).resolve().parents[1] / "src" / "assist3d" / "resources" / "models" / SHIPPED_NAME
     dest.parent.mkdir(parents=True, exist_ok=True)
-    save_segmenter(dest, loaded.model, loaded.config, meta=meta, half=True)
+    save_segmenter(dest, loaded.model, loaded.config, meta=meta, precision=args.precision)
     size = dest.stat().st_size
     if size > LIMIT:
         dest.unlink()
-        raise SystemExit(f"{dest}: {size} bytes, over the 5 MB limit; shrink the net")
+        raise SystemExit(f"{dest}: {size} bytes, over the 5 MB limit; shrink the net or use --precision int8")
     print(f"{dest}: {size / 1e6:.2f} MB, {meta}")
 
 

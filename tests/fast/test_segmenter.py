@@ -24,12 +24,14 @@ from assist3d.bench.evaluation.ap import match_scene, summarize  # noqa: E402
 from assist3d.learn.models.sparse import SparseSceneNorm, sparse_tensor  # noqa: E402
 from assist3d.pipeline import generate_dataset  # noqa: E402
 from assist3d.learn.segmenter import train as train_mod  # noqa: E402
-from assist3d.learn.segmenter.checkpoint import load_segmenter, save_segmenter  # noqa: E402
+from assist3d.learn.segmenter.checkpoint import (  # noqa: E402
+    INT8_BLOCK, dequantize_int8, load_segmenter, quantize_int8, save_segmenter)
 from assist3d.learn.segmenter.cluster import cluster_voxels  # noqa: E402
 from assist3d.learn.segmenter.config import ClusterConfig, parse_segmenter_config  # noqa: E402
 from assist3d.learn.segmenter.data import Scene, make_example  # noqa: E402
 from assist3d.learn.segmenter.geometric import segment_geometric  # noqa: E402
-from assist3d.learn.segmenter.infer import segment_points  # noqa: E402
+from assist3d.learn.segmenter.features import voxel_features, voxelize  # noqa: E402
+from assist3d.learn.segmenter.infer import predict_voxels, segment_points  # noqa: E402
 from assist3d.learn.segmenter.loader import BatchLoader  # noqa: E402
 from assist3d.learn.segmenter.model import Segmenter  # noqa: E402
 from assist3d.learn.segmenter.train import Budget, example_loss, train_segmenter  # noqa: E402
@@ -279,11 +281,57 @@ def test_half_precision_checkpoint_round_trip(tmp_path):
     cfg = parse_segmenter_config(TINY_NET)
     torch.manual_seed(0)
     model = Segmenter(cfg.net)
-    save_segmenter(tmp_path / "m.pt", model, cfg, meta={"note": "x"}, half=True)
+    save_segmenter(tmp_path / "m.pt", model, cfg, meta={"note": "x"}, precision="float16")
     loaded = load_segmenter(tmp_path / "m.pt")
     assert loaded.config == cfg and loaded.meta == {"note": "x"}
     for k, v in model.state_dict().items():
         assert torch.allclose(v.float(), loaded.model.state_dict()[k], atol=1e-2, rtol=1e-2)
+
+
+def test_int8_codes_round_trip_within_half_a_step_of_each_block():
+    g = torch.Generator().manual_seed(0)
+    t = torch.randn(27, 5, 7, generator=g) * torch.logspace(-3, 1, 7)  # 945 values: the last block is short
+    t[0, 0] = 0.0
+    t.view(-1)[:INT8_BLOCK] = 0.0  # an all-zero block must decode to zeros, not NaN
+    codes, scale = quantize_int8(t)
+    assert codes.dtype == torch.int8 and codes.shape == t.shape and scale.numel() == -(-t.numel() // INT8_BLOCK)
+    back = dequantize_int8(codes, scale)
+    step = scale.repeat_interleave(INT8_BLOCK)[: t.numel()].view(t.shape)
+    assert torch.all((back - t).abs() <= step / 2 + 1e-7)
+    assert torch.all(back.view(-1)[:INT8_BLOCK] == 0)
+
+
+def test_int8_checkpoint_is_smaller_and_predicts_like_the_float_model(tmp_path, tiny_scenes):
+    cfg = parse_segmenter_config(TINY_NET)
+    torch.manual_seed(0)
+    model = Segmenter(cfg.net).eval()
+    f32 = save_segmenter(tmp_path / "f32.pt", model, cfg)
+    i8 = save_segmenter(tmp_path / "i8.pt", model, cfg, meta={"note": "q"}, precision="int8")
+    assert i8.stat().st_size < 0.5 * f32.stat().st_size
+    raw = torch.load(i8, weights_only=True)
+    assert raw["version"] == 2 and raw["int8_scales"]
+    assert all(raw["state_dict"][k].dtype == torch.int8 for k in raw["int8_scales"])
+    loaded = load_segmenter(i8)
+    assert loaded.meta == {"note": "q"}
+    vox = voxelize(tiny_scenes[0].coord.astype(np.float32), cfg.net.voxel_size)
+    feats = voxel_features(vox, use_color=False)
+    fg, off = predict_voxels(model, vox.coords, feats)
+    fg8, off8 = predict_voxels(loaded.model, vox.coords, feats)
+    torch.manual_seed(1)
+    fg_other, _ = predict_voxels(Segmenter(cfg.net).eval(), vox.coords, feats)
+    assert np.abs(fg8 - fg).max() < 0.02 < np.abs(fg_other - fg).max()
+    assert np.abs(off8 - off).max() < 0.05 * np.abs(off).max()
+
+
+def test_int8_checkpoint_with_mismatched_scales_is_refused(tmp_path):
+    cfg = parse_segmenter_config(TINY_NET)
+    path = save_segmenter(tmp_path / "i8.pt", Segmenter(cfg.net), cfg, precision="int8")
+    raw = torch.load(path, weights_only=True)
+    key = next(iter(raw["int8_scales"]))
+    raw["int8_scales"][key] = raw["int8_scales"][key][:-1]
+    torch.save(raw, path)
+    with pytest.raises(DataError, match="do not match their scales"):
+        load_segmenter(path)
 
 
 def test_probe_runs_end_to_end_writes_the_json_contract_and_resumes(tiny_data, tmp_path):

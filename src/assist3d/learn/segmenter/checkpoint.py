@@ -8,6 +8,15 @@ validated by pydantic before a model is built.
 Keys: ``format`` (``"assist3d-segmenter"``), ``version``, ``config`` (JSON of
 :class:`SegmenterConfig`), ``meta`` (JSON: training sets, steps, seconds, ...), ``state_dict`` and,
 for resumable training files only, ``optimizer`` and ``progress`` (JSON).
+
+Precision (``save_segmenter(precision=...)``): float32 (training files), float16, or int8. int8
+files (version 2) store every weight matrix or convolution kernel of at least ``INT8_MIN_NUMEL``
+values as int8 codes in blocks of ``INT8_BLOCK`` consecutive values, each block with its own
+float32 scale (its largest magnitude / 127) in ``int8_scales``; the small tensors (biases,
+normalisation) stay float16. A larger network then fits the 5 MB cap of the shipped model
+(~1.03 bytes per weight instead of 2). Symmetric blockwise codes are what GGML's Q8_0 and
+bitsandbytes' blockwise quantisation use; written here because either library would be a heavy
+dependency for ~20 lines, and loading stays ``weights_only`` (int8 and float tensors only).
 """
 
 from __future__ import annotations
@@ -19,9 +28,10 @@ import re
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import torch
+import torch.nn.functional as F
 
 from ...core.errors import DataError
 from ...core.fileio import write_bytes_atomic
@@ -29,7 +39,12 @@ from .config import SegmenterConfig, parse_segmenter_config
 from .model import Segmenter
 
 FORMAT = "assist3d-segmenter"
-VERSION = 1
+VERSION = 1  # float32 / float16 files
+VERSION_INT8 = 2  # files with int8 weights (``int8_scales``)
+INT8_BLOCK = 64
+INT8_MIN_NUMEL = 1024
+
+Precision = Literal["float32", "float16", "int8"]
 
 
 @dataclass
@@ -41,17 +56,51 @@ class LoadedSegmenter:
     progress: dict[str, Any]
 
 
+def quantize_int8(t: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """Blockwise symmetric int8 codes of ``t`` (same shape) and the float32 scale of each block of
+    ``INT8_BLOCK`` consecutive values (row-major order; the last block may be shorter)."""
+    flat = t.detach().float().reshape(-1)
+    blocks = F.pad(flat, (0, (-flat.numel()) % INT8_BLOCK)).view(-1, INT8_BLOCK)
+    scale = blocks.abs().amax(1) / 127.0
+    scale = torch.where(scale > 0, scale, torch.ones_like(scale))
+    codes = torch.round(blocks / scale[:, None]).clamp(-127, 127).to(torch.int8)
+    return codes.reshape(-1)[: flat.numel()].view(t.shape).contiguous(), scale
+
+
+def dequantize_int8(codes: torch.Tensor, scale: torch.Tensor) -> torch.Tensor:
+    """The float32 tensor that :func:`quantize_int8` encoded."""
+    flat = codes.reshape(-1).float()
+    flat = F.pad(flat, (0, (-flat.numel()) % INT8_BLOCK)).view(-1, INT8_BLOCK) * scale.float()[:, None]
+    return flat.reshape(-1)[: codes.numel()].view(codes.shape)
+
+
+def _int8_candidate(v: torch.Tensor) -> bool:
+    return v.is_floating_point() and v.dim() >= 2 and v.numel() >= INT8_MIN_NUMEL
+
+
 def save_segmenter(path: str | Path, model: Segmenter, cfg: SegmenterConfig, *, meta: dict | None = None,
                    optimizer: torch.optim.Optimizer | None = None, progress: dict | None = None,
-                   half: bool = False) -> Path:
-    """Write ``path`` atomically. ``half`` stores float tensors as float16 (a smaller file to ship)."""
-    state = {k: (v.half() if half and v.is_floating_point() else v).contiguous() for k, v in model.state_dict().items()}
+                   precision: Precision = "float32") -> Path:
+    """Write ``path`` atomically. ``precision`` float16 or int8 gives a smaller file to ship (module docstring)."""
+    if precision not in ("float32", "float16", "int8"):
+        raise ValueError(f"precision must be float32, float16 or int8, not {precision!r}")
+    state: dict[str, torch.Tensor] = {}
+    scales: dict[str, torch.Tensor] = {}
+    for k, v in model.state_dict().items():
+        if precision == "int8" and _int8_candidate(v):
+            state[k], scales[k] = quantize_int8(v)
+        elif precision != "float32" and v.is_floating_point():
+            state[k] = v.detach().half().contiguous()
+        else:
+            state[k] = v.detach().contiguous()
     payload: dict[str, Any] = {
-        "format": FORMAT, "version": VERSION,
+        "format": FORMAT, "version": VERSION_INT8 if scales else VERSION,
         "config": json.dumps(cfg.model_dump(mode="json")),
         "meta": json.dumps(meta or {}),
         "state_dict": state,
     }
+    if scales:
+        payload["int8_scales"] = scales
     if optimizer is not None:
         payload["optimizer"] = optimizer.state_dict()
     if progress is not None:
@@ -76,6 +125,20 @@ def _json(path: Path, payload: dict, key: str) -> dict:
     return value
 
 
+def _dequantized(path: Path, state: dict[str, torch.Tensor], scales: Any) -> dict[str, torch.Tensor]:
+    """``state`` with its int8 entries decoded by their ``scales``; DataError if they do not match."""
+    if not isinstance(scales, dict) or not all(isinstance(v, torch.Tensor) for v in scales.values()):
+        raise DataError(f"{path}: not an assist3d segmenter checkpoint (int8_scales is not a dict of tensors)")
+    out = dict(state)
+    for k, scale in scales.items():
+        codes = state.get(k)
+        blocks = -(-codes.numel() // INT8_BLOCK) if codes is not None else -1
+        if codes is None or codes.dtype != torch.int8 or scale.dim() != 1 or scale.numel() != blocks:
+            raise DataError(f"{path}: int8 weights {k!r} do not match their scales")
+        out[k] = dequantize_int8(codes, scale)
+    return out
+
+
 def load_segmenter(path: str | Path, device: str = "cpu") -> LoadedSegmenter:
     """Read a checkpoint safely and build its model in eval mode; one-line :class:`DataError` otherwise."""
     path = Path(path)
@@ -94,13 +157,15 @@ def load_segmenter(path: str | Path, device: str = "cpu") -> LoadedSegmenter:
         raise DataError(f"{path}: not a readable checkpoint ({type(e).__name__})") from None
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise DataError(f"{path}: not an assist3d segmenter checkpoint (no format tag {FORMAT!r})")
-    if payload.get("version") != VERSION:
-        raise DataError(f"{path}: segmenter checkpoint version {payload.get('version')!r}; this assist3d reads {VERSION}")
+    if payload.get("version") not in (VERSION, VERSION_INT8):
+        raise DataError(f"{path}: segmenter checkpoint version {payload.get('version')!r}; "
+                        f"this assist3d reads {VERSION} and {VERSION_INT8}")
     cfg = parse_segmenter_config(_json(path, payload, "config"), f"{path} config")
     meta = _json(path, payload, "meta")
     state = payload.get("state_dict")
     if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor) for v in state.values()):
         raise DataError(f"{path}: not an assist3d segmenter checkpoint (state_dict is not a dict of tensors)")
+    state = _dequantized(path, state, payload.get("int8_scales", {}) if payload["version"] == VERSION_INT8 else {})
     model = Segmenter(cfg.net)
     try:
         model.load_state_dict({k: v.float() if v.is_floating_point() else v for k, v in state.items()})
