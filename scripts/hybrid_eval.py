@@ -4,11 +4,14 @@ components and the superpoints do not depend on the model and are computed once 
 
     python scripts/hybrid_eval.py MODEL.pt [MODEL.pt ...] --out hybrid.json
         [--eval array:../shared/data/real/dev --eval array:../shared/data/real/scannet_scene0451_01.npy]
+        [--tta]
 
 Rows: ``geometric`` and ``geometric+snap`` (no model; the control), then per model ``learned``
 (what ``assist3d probe`` scores), ``hybrid`` (what ``assist3d segment`` does by default),
 ``hybrid_v1`` (the first hybrid recipe, without the fallback proposals) and ``hybrid+stability``
-(the stability ranking, measured and not adopted; see ``learn/segmenter/hybrid.py``).
+(the stability ranking, measured and not adopted; see ``learn/segmenter/hybrid.py``). ``--tta``
+adds ``learned+tta`` and ``hybrid+tta``: the same with the network's outputs averaged over 8 copies
+of each scan (4 quarter turns about z, with and without a mirror; ``infer.predict_voxels_tta``).
 AP50 is over the scans of the first --eval spec; each further spec is reported on its own.
 """
 
@@ -28,7 +31,7 @@ from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.features import voxel_features, voxelize
 from assist3d.learn.segmenter.geometric import segment_geometric
 from assist3d.learn.segmenter.hybrid import HybridConfig, combine
-from assist3d.learn.segmenter.infer import instances, predict_voxels
+from assist3d.learn.segmenter.infer import instances, predict_voxels, predict_voxels_tta
 from assist3d.learn.segmenter.superpoints import snap_masks, superpoints
 
 ROOM_CHARS = 9  # rescans of a room share the first 9 characters of their name
@@ -54,6 +57,7 @@ def main() -> None:
     ap.add_argument("--eval", action="append")
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--tta", action="store_true", help="also the rows learned+tta and hybrid+tta")
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     specs = a.eval or ["array:../shared/data/real/dev", "array:../shared/data/real/scannet_scene0451_01.npy"]
@@ -80,6 +84,7 @@ def main() -> None:
         cfg = loaded.config
         learned: list = []
         hybrid: dict[str, list] = {name: [] for name in VARIANTS}
+        tta: dict[str, list] = {"learned+tta": [], "hybrid+tta": []}
         for _, _, s, geo, segs in scans:
             vox = voxelize(s.coord.astype(np.float32), cfg.net.voxel_size, s.color)
             fg, off = predict_voxels(loaded.model, vox.coords, voxel_features(vox, use_color=cfg.net.use_color))
@@ -88,7 +93,14 @@ def main() -> None:
             for name, variant in VARIANTS.items():
                 h = combine(inst, vox, fg, off, cfg.cluster, geo.masks, segs, hybrid=variant)
                 hybrid[name].append((h.masks, h.scores))
-        result["models"][path] = {"learned": score(learned)} | {name: score(p) for name, p in hybrid.items()}
+            if a.tta:
+                fg, off = predict_voxels_tta(loaded.model, cfg, s.coord, s.color, vox)
+                inst = instances(vox, fg, off, cfg.cluster)
+                tta["learned+tta"].append((inst.masks, inst.scores))
+                h = combine(inst, vox, fg, off, cfg.cluster, geo.masks, segs)
+                tta["hybrid+tta"].append((h.masks, h.scores))
+        rows = hybrid | (tta if a.tta else {})
+        result["models"][path] = {"learned": score(learned)} | {name: score(p) for name, p in rows.items()}
         r = result["models"][path]
         ap50 = {k: " / ".join(f"{x['AP50']:.3f}" for x in v) for k, v in r.items()}
         print(f"{path}: AP50 " + ", ".join(f"{k} {v}" for k, v in ap50.items()) + f" ({time.perf_counter() - t0:.0f} s)",

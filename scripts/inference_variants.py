@@ -24,16 +24,8 @@ from assist3d.bench.data import open_dataset
 from assist3d.bench.evaluation.ap import match_scene, summarize
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.cluster import mask_nms, radius_components
-from assist3d.learn.segmenter.features import voxel_features, voxelize
-from assist3d.learn.segmenter.infer import predict_voxels
-
-TTA = [(k, m) for m in (False, True) for k in range(4)]  # (quarter turns about z, mirror x)
-
-
-def _turn(k: int, mirror: bool) -> np.ndarray:
-    c, s = np.cos(k * np.pi / 2), np.sin(k * np.pi / 2)
-    r = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    return r @ np.diag([-1.0, 1.0, 1.0]) if mirror else r
+from assist3d.learn.segmenter.features import voxelize
+from assist3d.learn.segmenter.infer import TTA_TURNS, predict_voxels_tta
 
 
 def network_outputs(model_path: str, specs: list[str]) -> dict[str, dict[str, np.ndarray]]:
@@ -46,17 +38,11 @@ def network_outputs(model_path: str, specs: list[str]) -> dict[str, dict[str, np
         for sid in ds.scene_ids:
             s = ds.load(sid)
             vox = voxelize(s.coord.astype(np.float32), cfg.net.voxel_size, s.color)
-            n_vox = len(vox.centres)
-            count = np.bincount(vox.inverse, minlength=n_vox)
             fgs, offs = [], []
-            for k, mirror in TTA:
-                r = _turn(k, mirror)
-                v2 = voxelize((s.coord.astype(np.float64) @ r.T).astype(np.float32), cfg.net.voxel_size, s.color)
-                fg, off = predict_voxels(loaded.model, v2.coords, voxel_features(v2, use_color=cfg.net.use_color))
-                # back to the original voxels through the points; offsets rotated back (r orthogonal)
-                pf, po = fg[v2.inverse], off[v2.inverse] @ r
-                fgs.append(np.bincount(vox.inverse, pf, n_vox) / count)
-                offs.append(np.stack([np.bincount(vox.inverse, po[:, j], n_vox) / count for j in range(3)], 1))
+            for turn in TTA_TURNS:
+                fg, off = predict_voxels_tta(loaded.model, cfg, s.coord, s.color, vox, turns=(turn,))
+                fgs.append(fg)
+                offs.append(off)
             out[sid] = {"centres": vox.centres, "inverse": vox.inverse, "instance": s.instance, "valid": s.valid,
                         "fg": np.stack(fgs), "off": np.stack(offs)}
             print("network outputs:", sid, flush=True)

@@ -31,7 +31,8 @@ from assist3d.learn.segmenter.config import ClusterConfig, parse_segmenter_confi
 from assist3d.learn.segmenter.data import Scene, make_example  # noqa: E402
 from assist3d.learn.segmenter.geometric import segment_geometric  # noqa: E402
 from assist3d.learn.segmenter.features import voxel_features, voxelize  # noqa: E402
-from assist3d.learn.segmenter.infer import predict_voxels, segment_points  # noqa: E402
+from assist3d.learn.segmenter.infer import (  # noqa: E402
+    predict_voxels, predict_voxels_tta, segment_points, tta_rotation)
 from assist3d.learn.segmenter.loader import BatchLoader  # noqa: E402
 from assist3d.learn.segmenter.model import Segmenter  # noqa: E402
 from assist3d.learn.segmenter.train import Budget, example_loss, train_segmenter  # noqa: E402
@@ -451,6 +452,29 @@ def test_segment_reads_reader_specs_and_reports_ap_when_labels_are_known(tmp_pat
         assert r.exit_code == 0, (spec, r.output)
         row = json.loads(r.stdout.strip().splitlines()[-1])
         assert row["scene"] == "room" and row["AP50"] > 0.7, (spec, row)
+
+
+def test_test_time_augmentation_turns_offsets_back():
+    """Averaged over the 8 turns, the outputs follow a turned scan: fg the same per point, offsets
+    turned with it. Points sit at voxel centres so a quarter turn maps voxels to voxels. Forgetting
+    to turn a copy's offsets back breaks this; the identity turn alone is the plain prediction."""
+    cfg = parse_segmenter_config(TINY_NET)
+    torch.manual_seed(0)
+    model = Segmenter(cfg.net).eval()
+    rng = np.random.default_rng(0)
+    cells = np.unique(rng.integers(-15, 15, (600, 3)) * [1, 1, 0] + rng.integers(0, 8, (600, 1)) * [0, 0, 1], axis=0)
+    coord = ((cells + 0.5) * cfg.net.voxel_size).astype(np.float32)
+    r = tta_rotation(1, False)
+    turned = (coord.astype(np.float64) @ r.T).astype(np.float32)
+    vox, vox_t = voxelize(coord, cfg.net.voxel_size), voxelize(turned, cfg.net.voxel_size)
+    fg, off = predict_voxels_tta(model, cfg, coord, None, vox)
+    fg_t, off_t = predict_voxels_tta(model, cfg, turned, None, vox_t)
+    assert np.allclose(fg[vox.inverse], fg_t[vox_t.inverse], atol=1e-4)
+    assert np.allclose(off[vox.inverse] @ r.T, off_t[vox_t.inverse], atol=1e-4)
+    assert not np.allclose(off[vox.inverse], off_t[vox_t.inverse], atol=1e-2)
+    plain = predict_voxels(model, vox.coords, voxel_features(vox, use_color=False))
+    one = predict_voxels_tta(model, cfg, coord, None, vox, turns=((0, False),))
+    assert np.allclose(plain[0], one[0], atol=1e-6) and np.allclose(plain[1], one[1], atol=1e-6)
 
 
 def test_segmenter_config_sizes_have_bounds():

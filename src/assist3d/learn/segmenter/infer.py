@@ -38,6 +38,36 @@ def predict_voxels(model: Segmenter, coords: np.ndarray, feats: np.ndarray, devi
     return torch.sigmoid(logit).float().cpu().numpy(), offset.float().cpu().numpy()
 
 
+TTA_TURNS = tuple((k, m) for m in (False, True) for k in range(4))  # (quarter turns about z, mirror x)
+
+
+def tta_rotation(quarter_turns: int, mirror: bool) -> np.ndarray:
+    """(3, 3) rotation by ``quarter_turns`` x 90 degrees about z, after mirroring x if ``mirror``."""
+    c, s = np.cos(quarter_turns * np.pi / 2), np.sin(quarter_turns * np.pi / 2)
+    r = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return r @ np.diag([-1.0, 1.0, 1.0]) if mirror else r
+
+
+def predict_voxels_tta(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None,
+                       vox: Voxels, turns: tuple[tuple[int, bool], ...] = TTA_TURNS,
+                       device: str = "cpu") -> tuple[np.ndarray, np.ndarray]:
+    """Test-time augmentation: foreground probability (V,) and offsets (V, 3) on the voxels ``vox`` of
+    ``coord`` (N, 3), averaged over copies of the scan turned about z (and mirrored) by ``turns``.
+    Each copy is voxelised on its own, its outputs go back to ``vox`` through the points (the mean
+    over a voxel's points) and its offsets are turned back."""
+    n_vox = len(vox.centres)
+    count = np.bincount(vox.inverse, minlength=n_vox)
+    fg_sum, off_sum = np.zeros(n_vox), np.zeros((n_vox, 3))
+    for k, mirror in turns:
+        r = tta_rotation(k, mirror)
+        v2 = voxelize((np.asarray(coord, np.float64) @ r.T).astype(np.float32), cfg.net.voxel_size, color)
+        fg, off = predict_voxels(model, v2.coords, voxel_features(v2, use_color=cfg.net.use_color), device)
+        point_fg, point_off = fg[v2.inverse], off[v2.inverse] @ r  # r is orthogonal: r.T undoes it
+        fg_sum += np.bincount(vox.inverse, point_fg, n_vox) / count
+        off_sum += np.stack([np.bincount(vox.inverse, point_off[:, j], n_vox) / count for j in range(3)], 1)
+    return (fg_sum / len(turns)).astype(np.float32), (off_sum / len(turns)).astype(np.float32)
+
+
 def segment_points(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None = None, *,
                    cluster: ClusterConfig | None = None, device: str = "cpu") -> Segmentation:
     """Segment one scan: ``coord`` (N, 3) metres (z up), ``color`` (N, 3) uint8 or None."""
