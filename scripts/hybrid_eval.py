@@ -13,6 +13,9 @@ Rows: ``geometric`` and ``geometric+snap`` (no model; the control), then per mod
 adds ``learned+tta`` and ``hybrid+tta``: the same with the network's outputs averaged over 8 copies
 of each scan (4 quarter turns about z, with and without a mirror; ``infer.predict_voxels_tta``).
 AP50 is over the scans of the first --eval spec; each further spec is reported on its own.
+A MODEL argument of comma-joined files (``A.pt,B.pt``) is a seed ensemble: the foreground
+probabilities and offsets of its members are averaged before the rows above are formed (members must
+share the voxel size; the first member's clustering settings are used).
 """
 
 from __future__ import annotations
@@ -80,21 +83,26 @@ def main() -> None:
     result["control"]["geometric+snap"] = score([(snap_masks(geo.masks, segs), geo.scores) for *_, geo, segs in scans])
     for path in a.models:
         t0 = time.perf_counter()
-        loaded = load_segmenter(path)
-        cfg = loaded.config
+        members = [load_segmenter(p) for p in path.split(",")]
+        cfg = members[0].config
+        if any(m.config.net.voxel_size != cfg.net.voxel_size for m in members):
+            raise SystemExit(f"{path}: ensemble members must share the voxel size")
         learned: list = []
         hybrid: dict[str, list] = {name: [] for name in VARIANTS}
         tta: dict[str, list] = {"learned+tta": [], "hybrid+tta": []}
         for _, _, s, geo, segs in scans:
             vox = voxelize(s.coord.astype(np.float32), cfg.net.voxel_size, s.color)
-            fg, off = predict_voxels(loaded.model, vox.coords, voxel_features(vox, use_color=cfg.net.use_color))
+            outs = [predict_voxels(m.model, vox.coords, voxel_features(vox, use_color=m.config.net.use_color))
+                    for m in members]
+            fg, off = np.mean([o[0] for o in outs], 0), np.mean([o[1] for o in outs], 0)
             inst = instances(vox, fg, off, cfg.cluster)
             learned.append((inst.masks, inst.scores))
             for name, variant in VARIANTS.items():
                 h = combine(inst, vox, fg, off, cfg.cluster, geo.masks, segs, hybrid=variant)
                 hybrid[name].append((h.masks, h.scores))
             if a.tta:
-                fg, off = predict_voxels_tta(loaded.model, cfg, s.coord, s.color, vox)
+                outs = [predict_voxels_tta(m.model, m.config, s.coord, s.color, vox) for m in members]
+                fg, off = np.mean([o[0] for o in outs], 0), np.mean([o[1] for o in outs], 0)
                 inst = instances(vox, fg, off, cfg.cluster)
                 tta["learned+tta"].append((inst.masks, inst.scores))
                 h = combine(inst, vox, fg, off, cfg.cluster, geo.masks, segs)

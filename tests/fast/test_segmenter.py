@@ -418,6 +418,26 @@ def test_segment_a_ply_and_an_npy_and_refuse_bad_input(tmp_path):
         assert expect in str(r.exception) or expect in r.output, (name, str(r.exception), r.output)
 
 
+def test_segment_tta_flag_reaches_the_network_and_is_refused_without_one(tmp_path):
+    """--tta changes the scores (the network's outputs are averaged over 8 copies), keeps the output
+    contract, and the geometric reference, which has no network, refuses it."""
+    s = _room_with_boxes()
+    ckpt = _write_model(tmp_path / "m.pt")
+    np.save(tmp_path / "room.npy", s.coord)
+    scores = {}
+    for name, extra in (("plain", []), ("tta", ["--tta"])):
+        r = runner.invoke(app, ["segment", str(tmp_path / "room.npy"), "--out", str(tmp_path / name),
+                                "--checkpoint", str(ckpt), "--method", "learned", *extra])
+        assert r.exit_code == 0, r.output
+        with np.load(tmp_path / name / "room.npz") as z:
+            assert z["masks"].shape[1] == len(s.coord)
+            scores[name] = z["scores"]
+    assert len(scores["plain"]) != len(scores["tta"]) or not np.allclose(scores["plain"], scores["tta"])
+    r = runner.invoke(app, ["segment", str(tmp_path / "room.npy"), "--out", str(tmp_path / "g"), "--method", "geometric",
+                            "--tta"])
+    assert r.exit_code != 0 and "--tta" in (str(r.exception) + r.output)
+
+
 SHARED_SCAN = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "real" / "scannet_scene0451_01.npy"
 
 

@@ -228,6 +228,8 @@ def segment_cmd(
                                "ranked by the model, fallback proposals below them, snapped to superpoints), "
                                "learned (the model's instances only) or "
                                "geometric (planes removed, connected components; no model)"),
+    tta: bool = typer.Option(False, "--tta", help="average the network over 8 turned and mirrored copies of the scan "
+                             "(8x the network's time; measured in docs/fidelity.md, off by default)"),
     png: bool = typer.Option(False, "--png", help="also write <scene_id>.png, a top view coloured by instance"),
     as_json: bool = typer.Option(False, "--json", help="print one JSON line per scene (instances, seconds, AP when GT is known)"),
     threads: int = typer.Option(0, "--threads", min=0, max=256, help="torch CPU threads (0 = all cores)"),
@@ -241,6 +243,8 @@ def segment_cmd(
         raise ConfigError(f"--method {method!r}: expected 'hybrid', 'learned' or 'geometric'")
     if method == "geometric" and checkpoint is not None:
         raise ConfigError("--checkpoint is for --method hybrid or learned; the geometric reference has no weights")
+    if method == "geometric" and tta:
+        raise ConfigError("--tta is for --method hybrid or learned; the geometric reference has no network to average")
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out {out}: exists and is not a folder")
     loaded = None
@@ -266,11 +270,11 @@ def segment_cmd(
         if loaded is not None and method == "hybrid":
             from ..learn.segmenter.hybrid import segment_hybrid
 
-            seg = segment_hybrid(loaded.model, loaded.config, coord[finite], sub_color)
+            seg = segment_hybrid(loaded.model, loaded.config, coord[finite], sub_color, tta=tta)
         elif loaded is not None:
             from ..learn.segmenter.infer import segment_points
 
-            seg = segment_points(loaded.model, loaded.config, coord[finite], sub_color)
+            seg = segment_points(loaded.model, loaded.config, coord[finite], sub_color, tta=tta)
         else:
             from ..learn.segmenter.geometric import segment_geometric
 

@@ -41,9 +41,9 @@ import numpy as np
 
 from .cluster import instance_score, mask_nms, pairwise_iou
 from .config import ClusterConfig, SegmenterConfig
-from .features import Voxels, voxel_features, voxelize
+from .features import Voxels, voxelize
 from .geometric import GeometricConfig, segment_geometric
-from .infer import Segmentation, instances, predict_voxels
+from .infer import Segmentation, instances, predict_scan
 from .model import Segmenter
 from .superpoints import SuperpointConfig, snap_masks, superpoints
 
@@ -129,13 +129,14 @@ def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, offset: np.ndarr
 def segment_hybrid(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None = None, *,
                    geometric: GeometricConfig = GeometricConfig(),
                    superpoint: SuperpointConfig = SuperpointConfig(), hybrid: HybridConfig = HybridConfig(),
-                   device: str = "cpu") -> Segmentation:
-    """Segment one scan with the hybrid recipe: ``coord`` (N, 3) metres (z up), ``color`` (N, 3) uint8 or None."""
+                   tta: bool = False, device: str = "cpu") -> Segmentation:
+    """Segment one scan with the hybrid recipe: ``coord`` (N, 3) metres (z up), ``color`` (N, 3) uint8 or
+    None; ``tta`` averages the network over 8 turned and mirrored copies of the scan (``infer.predict_scan``)."""
     coord = np.asarray(coord, np.float32)
     if cfg.net.use_color and color is None:
         color = np.full((len(coord), 3), 128, np.uint8)
     vox = voxelize(coord, cfg.net.voxel_size, color)
-    fg, offset = predict_voxels(model, vox.coords, voxel_features(vox, use_color=cfg.net.use_color), device)
+    fg, offset = predict_scan(model, cfg, coord, color, vox, tta=tta, device=device)
     return combine(instances(vox, fg, offset, cfg.cluster), vox, fg, offset, cfg.cluster,
                    segment_geometric(coord, geometric).masks, superpoints(coord, superpoint), superpoint.min_cover,
                    hybrid)

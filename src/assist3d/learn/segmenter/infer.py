@@ -68,14 +68,24 @@ def predict_voxels_tta(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray
     return (fg_sum / len(turns)).astype(np.float32), (off_sum / len(turns)).astype(np.float32)
 
 
+def predict_scan(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None, vox: Voxels,
+                 *, tta: bool = False, device: str = "cpu") -> tuple[np.ndarray, np.ndarray]:
+    """Foreground probability (V,) and offsets (V, 3) on the voxels ``vox`` of ``coord``: one pass of
+    the network, or with ``tta`` the mean over the 8 copies of :data:`TTA_TURNS`."""
+    if tta:
+        return predict_voxels_tta(model, cfg, coord, color, vox, device=device)
+    return predict_voxels(model, vox.coords, voxel_features(vox, use_color=cfg.net.use_color), device)
+
+
 def segment_points(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None = None, *,
-                   cluster: ClusterConfig | None = None, device: str = "cpu") -> Segmentation:
-    """Segment one scan: ``coord`` (N, 3) metres (z up), ``color`` (N, 3) uint8 or None."""
+                   cluster: ClusterConfig | None = None, tta: bool = False, device: str = "cpu") -> Segmentation:
+    """Segment one scan: ``coord`` (N, 3) metres (z up), ``color`` (N, 3) uint8 or None; ``tta``
+    averages the network over 8 turned and mirrored copies of the scan (8 times the network's time)."""
     if cfg.net.use_color and color is None:
         color = np.full((len(coord), 3), 128, np.uint8)
-    vox = voxelize(np.asarray(coord, np.float32), cfg.net.voxel_size, color)
-    feats = voxel_features(vox, use_color=cfg.net.use_color)
-    fg, offset = predict_voxels(model, vox.coords, feats, device)
+    coord = np.asarray(coord, np.float32)
+    vox = voxelize(coord, cfg.net.voxel_size, color)
+    fg, offset = predict_scan(model, cfg, coord, color, vox, tta=tta, device=device)
     return instances(vox, fg, offset, cluster or cfg.cluster)
 
 
