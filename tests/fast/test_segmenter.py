@@ -25,7 +25,7 @@ from assist3d.learn.models.sparse import SparseSceneNorm, sparse_tensor  # noqa:
 from assist3d.pipeline import generate_dataset  # noqa: E402
 from assist3d.learn.segmenter import train as train_mod  # noqa: E402
 from assist3d.learn.segmenter.checkpoint import (  # noqa: E402
-    INT8_BLOCK, dequantize_int8, load_segmenter, quantize_int8, save_segmenter)
+    INT8_BLOCK, dequantize_int8, load_segmenter, load_segmenters, quantize_int8, save_segmenter)
 from assist3d.learn.segmenter.cluster import cluster_voxels  # noqa: E402
 from assist3d.learn.segmenter.config import ClusterConfig, parse_segmenter_config  # noqa: E402
 from assist3d.learn.segmenter.data import Scene, make_example  # noqa: E402
@@ -436,6 +436,36 @@ def test_segment_tta_flag_reaches_the_network_and_is_refused_without_one(tmp_pat
     r = runner.invoke(app, ["segment", str(tmp_path / "room.npy"), "--out", str(tmp_path / "g"), "--method", "geometric",
                             "--tta"])
     assert r.exit_code != 0 and "--tta" in (str(r.exception) + r.output)
+
+
+def test_an_ensemble_averages_its_members_and_refuses_other_features(tmp_path):
+    """Two checkpoints read as one model: the mean of their probabilities and offsets; one member
+    alone is the plain model; a member on other voxels is refused by name; `segment` takes both."""
+    cfg = parse_segmenter_config(TINY_NET)
+    paths = []
+    for seed in (0, 1):
+        torch.manual_seed(seed)
+        paths.append(save_segmenter(tmp_path / f"m{seed}.pt", Segmenter(cfg.net), cfg))
+    s = _room_with_boxes()
+    vox = voxelize(s.coord, cfg.net.voxel_size)
+    feats = voxel_features(vox, use_color=False)
+    outs = [predict_voxels(load_segmenter(p).model, vox.coords, feats) for p in paths]
+    ens = load_segmenters(paths)
+    fg, off = predict_voxels(ens.model, vox.coords, feats)
+    assert np.allclose(fg, (outs[0][0] + outs[1][0]) / 2, atol=1e-5)
+    assert np.allclose(off, (outs[0][1] + outs[1][1]) / 2, atol=1e-5)
+    assert not np.allclose(outs[0][0], outs[1][0], atol=1e-3)  # the members differ, so the mean is a test
+    assert [m["file"] for m in ens.meta["ensemble"]] == [str(p) for p in paths]
+    assert load_segmenters(paths[:1]).meta == load_segmenter(paths[0]).meta
+    other = parse_segmenter_config({**TINY_NET, "net": {**TINY_NET["net"], "voxel_size": 0.05}})
+    odd = save_segmenter(tmp_path / "odd.pt", Segmenter(other.net), other)
+    with pytest.raises(DataError, match="odd.pt: cannot join"):
+        load_segmenters([paths[0], odd])
+    np.save(tmp_path / "room.npy", s.coord)
+    r = runner.invoke(app, ["segment", str(tmp_path / "room.npy"), "--out", str(tmp_path / "o"),
+                            "--checkpoint", str(paths[0]), "--checkpoint", str(paths[1]), "--json"])
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout.strip().splitlines()[-1])["points"] == len(s.coord)
 
 
 SHARED_SCAN = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "real" / "scannet_scene0451_01.npy"

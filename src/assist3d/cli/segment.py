@@ -223,7 +223,8 @@ def _png(path: Path, coord: np.ndarray, colors: np.ndarray, title: str) -> None:
 def segment_cmd(
     input_: str = typer.Argument(..., metavar="INPUT", help="a .ply (mesh or point cloud), an (N, 3|6|8) .npy, or FORMAT:PATH"),
     out: Path = typer.Option(..., "--out", "-o", help="output folder: <scene_id>.npz (masks, scores) and <scene_id>.ply"),
-    checkpoint: Optional[Path] = typer.Option(None, "--checkpoint", help="a trained segmenter (default: the shipped model)"),
+    checkpoint: Optional[list[Path]] = typer.Option(None, "--checkpoint", help="a trained segmenter (default: the shipped "
+                                                    "model); repeat it to average several models' outputs (an ensemble)"),
     method: str = typer.Option("hybrid", "--method", help="hybrid (the model's instances and the geometric components, "
                                "ranked by the model, fallback proposals below them, snapped to superpoints), "
                                "learned (the model's instances only) or "
@@ -241,7 +242,7 @@ def segment_cmd(
 
     if method not in ("hybrid", "learned", "geometric"):
         raise ConfigError(f"--method {method!r}: expected 'hybrid', 'learned' or 'geometric'")
-    if method == "geometric" and checkpoint is not None:
+    if method == "geometric" and checkpoint:
         raise ConfigError("--checkpoint is for --method hybrid or learned; the geometric reference has no weights")
     if method == "geometric" and tta:
         raise ConfigError("--tta is for --method hybrid or learned; the geometric reference has no network to average")
@@ -252,12 +253,12 @@ def segment_cmd(
         _require_torch()
         import torch
 
-        from ..learn.segmenter.checkpoint import load_segmenter
+        from ..learn.segmenter.checkpoint import load_segmenters
         from ..learn.segmenter.shipped import shipped_model_path
 
         if threads:
             torch.set_num_threads(threads)
-        loaded = load_segmenter(checkpoint or shipped_model_path())
+        loaded = load_segmenters(list(checkpoint or [shipped_model_path()]))
     n_done = 0
     for scene_id, coord, color, sample in _inputs(input_):
         t0 = time.perf_counter()

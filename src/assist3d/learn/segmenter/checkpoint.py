@@ -36,7 +36,7 @@ import torch.nn.functional as F
 from ...core.errors import DataError
 from ...core.fileio import write_bytes_atomic
 from .config import SegmenterConfig, parse_segmenter_config
-from .model import Segmenter
+from .model import Network, Segmenter, SegmenterEnsemble
 
 FORMAT = "assist3d-segmenter"
 VERSION = 1  # float32 / float16 files
@@ -49,7 +49,7 @@ Precision = Literal["float32", "float16", "int8"]
 
 @dataclass
 class LoadedSegmenter:
-    model: Segmenter
+    model: Network
     config: SegmenterConfig
     meta: dict[str, Any]
     optimizer: dict | None
@@ -175,3 +175,24 @@ def load_segmenter(path: str | Path, device: str = "cpu") -> LoadedSegmenter:
     model.to(device).eval()
     progress = _json(path, payload, "progress") if "progress" in payload else {}
     return LoadedSegmenter(model=model, config=cfg, meta=meta, optimizer=payload.get("optimizer"), progress=progress)
+
+
+def load_segmenters(paths: list[str | Path], device: str = "cpu") -> LoadedSegmenter:
+    """One checkpoint, or several read as a :class:`SegmenterEnsemble` (outputs averaged). The first
+    file's configuration (voxel size, clustering) is used; every member must read the same input
+    features, otherwise a :class:`DataError` names the file that differs. ``meta["ensemble"]`` lists
+    the members' files and metadata."""
+    if not paths:
+        raise DataError("no checkpoint given")
+    loaded = [load_segmenter(p, device) for p in paths]
+    if len(loaded) == 1:
+        return loaded[0]
+    first = loaded[0].config.net
+    for path, one in zip(paths[1:], loaded[1:]):
+        net = one.config.net
+        if (net.voxel_size, net.use_color) != (first.voxel_size, first.use_color):
+            raise DataError(f"{path}: cannot join the ensemble of {paths[0]}: voxel size {net.voxel_size} m and "
+                            f"colour {net.use_color} against {first.voxel_size} m and {first.use_color}")
+    ensemble = SegmenterEnsemble([one.model for one in loaded]).to(device).eval()
+    meta = {"ensemble": [{"file": str(p), **one.meta} for p, one in zip(paths, loaded)]}
+    return LoadedSegmenter(model=ensemble, config=loaded[0].config, meta=meta, optimizer=None, progress={})

@@ -44,7 +44,7 @@ from .config import ClusterConfig, SegmenterConfig
 from .features import Voxels, voxelize
 from .geometric import GeometricConfig, segment_geometric
 from .infer import Segmentation, instances, predict_scan
-from .model import Segmenter
+from .model import Network
 from .superpoints import SuperpointConfig, snap_masks, superpoints
 
 NMS_IOU = 0.5
@@ -126,7 +126,7 @@ def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, offset: np.ndarr
     return Segmentation(masks=masks, scores=scores.astype(np.float32), labels=labels_from_masks(masks))
 
 
-def segment_hybrid(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None = None, *,
+def segment_hybrid(model: Network, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None = None, *,
                    geometric: GeometricConfig = GeometricConfig(),
                    superpoint: SuperpointConfig = SuperpointConfig(), hybrid: HybridConfig = HybridConfig(),
                    tta: bool = False, device: str = "cpu") -> Segmentation:

@@ -10,7 +10,7 @@ import torch
 from .cluster import cluster_voxels, point_masks
 from .config import ClusterConfig, SegmenterConfig
 from .features import Voxels, voxel_features, voxelize
-from .model import Segmenter
+from .model import Network
 
 
 @dataclass(frozen=True)
@@ -29,7 +29,7 @@ def batch_coords(coords: np.ndarray, b: int = 0) -> np.ndarray:
 
 
 @torch.no_grad()
-def predict_voxels(model: Segmenter, coords: np.ndarray, feats: np.ndarray, device: str = "cpu") -> tuple[np.ndarray, np.ndarray]:
+def predict_voxels(model: Network, coords: np.ndarray, feats: np.ndarray, device: str = "cpu") -> tuple[np.ndarray, np.ndarray]:
     """Foreground probability (V,) and offsets (V, 3) for one scene's voxels."""
     model.eval()
     c = torch.from_numpy(batch_coords(coords)).to(device)
@@ -48,7 +48,7 @@ def tta_rotation(quarter_turns: int, mirror: bool) -> np.ndarray:
     return r @ np.diag([-1.0, 1.0, 1.0]) if mirror else r
 
 
-def predict_voxels_tta(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None,
+def predict_voxels_tta(model: Network, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None,
                        vox: Voxels, turns: tuple[tuple[int, bool], ...] = TTA_TURNS,
                        device: str = "cpu") -> tuple[np.ndarray, np.ndarray]:
     """Test-time augmentation: foreground probability (V,) and offsets (V, 3) on the voxels ``vox`` of
@@ -68,7 +68,7 @@ def predict_voxels_tta(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray
     return (fg_sum / len(turns)).astype(np.float32), (off_sum / len(turns)).astype(np.float32)
 
 
-def predict_scan(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None, vox: Voxels,
+def predict_scan(model: Network, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None, vox: Voxels,
                  *, tta: bool = False, device: str = "cpu") -> tuple[np.ndarray, np.ndarray]:
     """Foreground probability (V,) and offsets (V, 3) on the voxels ``vox`` of ``coord``: one pass of
     the network, or with ``tta`` the mean over the 8 copies of :data:`TTA_TURNS`."""
@@ -77,7 +77,7 @@ def predict_scan(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray, colo
     return predict_voxels(model, vox.coords, voxel_features(vox, use_color=cfg.net.use_color), device)
 
 
-def segment_points(model: Segmenter, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None = None, *,
+def segment_points(model: Network, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None = None, *,
                    cluster: ClusterConfig | None = None, tta: bool = False, device: str = "cpu") -> Segmentation:
     """Segment one scan: ``coord`` (N, 3) metres (z up), ``color`` (N, 3) uint8 or None; ``tta``
     averages the network over 8 turned and mirrored copies of the scan (8 times the network's time)."""

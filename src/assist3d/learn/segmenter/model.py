@@ -48,5 +48,27 @@ class Segmenter(nn.Module):
         return self.fg_head(full).squeeze(1), self.offset_head(full)
 
 
+class SegmenterEnsemble(nn.Module):
+    """Several trained segmenters as one: the same ``forward`` as :class:`Segmenter`, returning the
+    logit of the members' mean foreground probability and their mean offset. Members must share the
+    input features (voxel size and colour use); docs/fidelity.md ("Seed ensembles") measures it."""
+
+    PROB_EPS = 1e-6  # keeps the logit of a mean probability of exactly 0 or 1 finite
+
+    def __init__(self, members: list[Segmenter]):
+        super().__init__()
+        if not members:
+            raise ValueError("an ensemble needs at least one segmenter")
+        self.members = nn.ModuleList(members)
+
+    def forward(self, coords: torch.Tensor, feats: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        outs = [m(coords, feats) for m in self.members]
+        prob = torch.stack([torch.sigmoid(logit) for logit, _ in outs]).mean(0)
+        return torch.logit(prob, eps=self.PROB_EPS), torch.stack([off for _, off in outs]).mean(0)
+
+
+Network = Segmenter | SegmenterEnsemble
+
+
 def count_parameters(model: nn.Module) -> int:
     return sum(p.numel() for p in model.parameters())
