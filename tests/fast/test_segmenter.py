@@ -194,6 +194,36 @@ def test_resumed_training_equals_an_uninterrupted_run(tiny_scenes, tmp_path, mon
     assert [r.split(",")[3:] for r in log_cut] == [r.split(",")[3:] for r in log_full]  # same losses
 
 
+def test_weight_average_resumes_exactly_and_follows_its_formula(tiny_scenes, tmp_path, monkeypatch, one_thread):
+    """optim.ema_decay: the averaged weights travel in last.pt, a resumed run ends with the same
+    average as an uninterrupted one, and the average is not the last weights."""
+    cfg = parse_segmenter_config({**TINY_NET, "optim": {**TINY_NET["optim"], "ema_decay": 0.9}})
+    train_segmenter(cfg, tiny_scenes, tmp_path / "full", seed=3, budget=Budget(steps=4))
+    monkeypatch.setattr(train_mod, "CHECKPOINT_EVERY_S", -1.0)
+
+    def stop(row):
+        if row["step"] == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        train_segmenter(cfg, tiny_scenes, tmp_path / "cut", seed=3, budget=Budget(steps=4), on_step=stop)
+    train_segmenter(cfg, tiny_scenes, tmp_path / "cut", seed=3, budget=Budget(steps=4))
+    full, cut = load_segmenter(tmp_path / "full" / "last.pt"), load_segmenter(tmp_path / "cut" / "last.pt")
+    assert full.ema_state is not None and all(torch.equal(full.ema_state[k], cut.ema_state[k]) for k in full.ema_state)
+    live = full.model.state_dict()
+    assert any(not torch.allclose(full.ema_state[k], live[k]) for k in live if live[k].is_floating_point())
+    # the formula, with its warm-up: at step 0 the decay is min(0.9, 1/10) = 0.1
+    a, b = Segmenter(cfg.net), Segmenter(cfg.net)
+    pa, pb = next(a.parameters()).detach().clone(), next(b.parameters()).detach().clone()
+    train_mod.update_ema(a, b, 0.9, 0)
+    assert torch.allclose(next(a.parameters()), 0.1 * pa + 0.9 * pb)
+    train_mod.update_ema(a, b, 0.9, 1000)
+    assert torch.allclose(next(a.parameters()), 0.9 * (0.1 * pa + 0.9 * pb) + 0.1 * pb)
+    # a run without averaging stores none
+    train_segmenter(parse_segmenter_config(TINY_NET), tiny_scenes, tmp_path / "plain", seed=3, budget=Budget(steps=1))
+    assert load_segmenter(tmp_path / "plain" / "last.pt").ema_state is None
+
+
 def test_extra_loggers_get_the_rows_of_the_csv_log(tiny_scenes, tmp_path, one_thread):
     class Recorder:
         rows: list = []

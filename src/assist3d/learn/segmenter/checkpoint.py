@@ -9,6 +9,9 @@ Keys: ``format`` (``"assist3d-segmenter"``), ``version``, ``config`` (JSON of
 :class:`SegmenterConfig`), ``meta`` (JSON: training sets, steps, seconds, ...), ``state_dict`` and,
 for resumable training files only, ``optimizer`` and ``progress`` (JSON).
 
+Training files of a run with ``optim.ema_decay`` also hold ``ema_state_dict``, the averaged weights
+(float32 tensors), which become the trained model (``LoadedSegmenter.ema_state``).
+
 Precision (``save_segmenter(precision=...)``): float32 (training files), float16, or int8. int8
 files (version 2) store every weight matrix or convolution kernel of at least ``INT8_MIN_NUMEL``
 values as int8 codes in blocks of ``INT8_BLOCK`` consecutive values, each block with its own
@@ -54,6 +57,7 @@ class LoadedSegmenter:
     meta: dict[str, Any]
     optimizer: dict | None
     progress: dict[str, Any]
+    ema_state: dict[str, torch.Tensor] | None = None
 
 
 def quantize_int8(t: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -80,7 +84,7 @@ def _int8_candidate(v: torch.Tensor) -> bool:
 
 def save_segmenter(path: str | Path, model: Segmenter, cfg: SegmenterConfig, *, meta: dict | None = None,
                    optimizer: torch.optim.Optimizer | None = None, progress: dict | None = None,
-                   precision: Precision = "float32") -> Path:
+                   precision: Precision = "float32", ema: Segmenter | None = None) -> Path:
     """Write ``path`` atomically. ``precision`` float16 or int8 gives a smaller file to ship (module docstring)."""
     if precision not in ("float32", "float16", "int8"):
         raise ValueError(f"precision must be float32, float16 or int8, not {precision!r}")
@@ -103,6 +107,8 @@ def save_segmenter(path: str | Path, model: Segmenter, cfg: SegmenterConfig, *, 
         payload["int8_scales"] = scales
     if optimizer is not None:
         payload["optimizer"] = optimizer.state_dict()
+    if ema is not None:
+        payload["ema_state_dict"] = {k: v.detach().contiguous() for k, v in ema.state_dict().items()}
     if progress is not None:
         payload["progress"] = json.dumps(progress)
     buf = io.BytesIO()
@@ -174,7 +180,12 @@ def load_segmenter(path: str | Path, device: str = "cpu") -> LoadedSegmenter:
         raise DataError(f"{path}: the weights do not fit the model its config describes ({first})") from None
     model.to(device).eval()
     progress = _json(path, payload, "progress") if "progress" in payload else {}
-    return LoadedSegmenter(model=model, config=cfg, meta=meta, optimizer=payload.get("optimizer"), progress=progress)
+    ema = payload.get("ema_state_dict")
+    if ema is not None and (not isinstance(ema, dict) or set(ema) != set(state)
+                            or not all(isinstance(v, torch.Tensor) and v.shape == state[k].shape for k, v in ema.items())):
+        raise DataError(f"{path}: its averaged weights (ema_state_dict) do not match its model's")
+    return LoadedSegmenter(model=model, config=cfg, meta=meta, optimizer=payload.get("optimizer"), progress=progress,
+                           ema_state=ema)
 
 
 def load_segmenters(paths: list[str | Path], device: str = "cpu") -> LoadedSegmenter:

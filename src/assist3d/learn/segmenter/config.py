@@ -66,6 +66,8 @@ class OptimConfig(Section):
     batch_size: int = Field(2, ge=1, le=64, description="scenes per step")
     offset_weight: float = Field(1.0, ge=0.0)
     direction_weight: float = Field(0.5, ge=0.0)
+    ema_decay: float = Field(0.0, ge=0.0, lt=1.0, description="exponential moving average of the weights, kept "
+                             "beside the trained ones and used as the final model (0 = off; e.g. 0.99)")
 
 
 class SegmenterConfig(Section):

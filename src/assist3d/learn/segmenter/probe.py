@@ -186,7 +186,10 @@ def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", lo
                                   loader_workers=loader_workers,
                                   on_step=lambda row: emit("step", {"seed": seed, **row}))
             loaded = load_segmenter(rec.checkpoint)
-            save_segmenter(model_path, loaded.model, req.config, meta=loaded.meta)
+            if loaded.ema_state is not None:  # optim.ema_decay: the averaged weights are the trained model
+                loaded.model.load_state_dict(loaded.ema_state)
+            save_segmenter(model_path, loaded.model, req.config,
+                           meta=loaded.meta | ({"weights": "ema"} if loaded.ema_state is not None else {}))
         meta = load_segmenter(model_path).meta
         emit("eval_start", {"seed": seed})
         metrics = evaluate_model(model_path, req.eval, sdir / "pred",

@@ -9,6 +9,7 @@ number of steps it reached is recorded).
 
 from __future__ import annotations
 
+import copy
 import logging
 import math
 import time
@@ -95,6 +96,17 @@ def _lr(cfg: SegmenterConfig, progress: float) -> float:
     return cfg.optim.lr * (0.01 + 0.99 * 0.5 * (1 + math.cos(math.pi * p)))
 
 
+@torch.no_grad()
+def update_ema(ema: Segmenter, model: Segmenter, decay: float, step: int) -> None:
+    """``ema <- d * ema + (1 - d) * model`` with ``d = min(decay, (1 + step) / (10 + step))``: the
+    usual warm-up, so the first steps' random weights do not linger in the average. Buffers are copied."""
+    d = min(decay, (1 + step) / (10 + step))
+    for pe, p in zip(ema.parameters(), model.parameters()):
+        pe.mul_(d).add_(p.detach(), alpha=1.0 - d)
+    for be, b in zip(ema.buffers(), model.buffers()):
+        be.copy_(b)
+
+
 def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str | Path, *, seed: int,
                     budget: Budget, meta: dict | None = None, device: str = "cpu", loader_workers: int = 0,
                     on_step: Callable[[dict], None] | None = None,
@@ -116,6 +128,7 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
     torch.manual_seed(seed)
     model = Segmenter(cfg.net).to(device)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.optim.lr, weight_decay=cfg.optim.weight_decay)
+    ema = copy.deepcopy(model).requires_grad_(False) if cfg.optim.ema_decay > 0 else None
     step, seconds, last_loss = 0, 0.0, float("nan")
     if last.is_file():
         loaded = load_segmenter(last, device)
@@ -124,6 +137,10 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
         model.load_state_dict(loaded.model.state_dict())
         if loaded.optimizer is not None:
             opt.load_state_dict(loaded.optimizer)
+        if ema is not None:
+            if loaded.ema_state is None:
+                raise ConfigError(f"{last}: holds no averaged weights although optim.ema_decay is set")
+            ema.load_state_dict(loaded.ema_state)
         step = int(loaded.progress.get("step", 0))
         seconds = float(loaded.progress.get("train_seconds", 0.0))
         last_loss = float(loaded.progress.get("loss", float("nan")))
@@ -136,7 +153,7 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
 
     def save() -> None:
         progress = {"step": step, "train_seconds": seconds, "loss": last_loss, "seed": seed, "budget": budget.as_dict()}
-        save_segmenter(last, model, cfg, meta={**meta, **progress}, optimizer=opt, progress=progress)
+        save_segmenter(last, model, cfg, meta={**meta, **progress}, optimizer=opt, progress=progress, ema=ema)
         log_all(sinks, pending)  # rows reach the logs only with the checkpoint that covers them
         pending.clear()
 
@@ -156,6 +173,8 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
                 loss.backward()
                 torch.nn.utils.clip_grad_norm_(model.parameters(), 5.0)
                 opt.step()
+                if ema is not None:
+                    update_ema(ema, model, cfg.optim.ema_decay, step)
                 step += 1
                 seconds += time.perf_counter() - t0
                 last_loss = parts["loss"]
