@@ -13,7 +13,8 @@
 # DEV (real scans, default ../shared/data/real/dev), THREADS (torch threads, default 2), LOADER_WORKERS
 # (example-building processes, default 0: on a 2-core machine a worker beside 2 torch threads slowed
 # training ~2x; the batches are the same for any number),
-# SKIP_REAL=1 to leave out the leave-one-room-out rows; TSDF=1 adds "assist3d-tsdf": the ASSIST-3D
+# PROBE_CONFIG (segmenter config for every probe; default configs/segmenter-pre-ema.yaml, the recipe
+# of the published tables; "" for today's defaults), SKIP_REAL=1 to leave out the leave-one-room-out rows; TSDF=1 adds "assist3d-tsdf": the ASSIST-3D
 # preset with render.point_source=tsdf (ScanNet-like reconstructed surfaces; needs the [sim] extra),
 # the same scenes as "assist3d" (same seed and layouts), only the points differ.
 set -euo pipefail
@@ -27,6 +28,9 @@ HERE="$(cd "$(dirname "$0")/.." && pwd)"
 DEV=${DEV:-$HERE/../shared/data/real/dev}
 THREADS=${THREADS:-2}
 LOADER_WORKERS=${LOADER_WORKERS:-0}
+PROBE_CONFIG=${PROBE_CONFIG-$HERE/configs/segmenter-pre-ema.yaml}
+CONFIG_ARGS=()
+if [[ -n "$PROBE_CONFIG" ]]; then CONFIG_ARGS=(--config "$PROBE_CONFIG"); fi
 if [[ -z "${ASSIST3D:-}" ]]; then
   if command -v assist3d >/dev/null 2>&1; then ASSIST3D=assist3d; else ASSIST3D="$HERE/.venv/bin/assist3d"; fi
 fi
@@ -52,7 +56,7 @@ fi
 for k in $(seq 1 "$SEEDS"); do
   for g in $PROBED; do
     "$ASSIST3D" probe --train "assist3d:$OUT/data/$g" --eval "array:$DEV" --steps "$STEPS" --seeds "$k" \
-      --threads "$THREADS" --loader-workers "$LOADER_WORKERS" --out "$OUT/probe/$g" --json > "$OUT/probe/$g.json"
+      --threads "$THREADS" --loader-workers "$LOADER_WORKERS" "${CONFIG_ARGS[@]}" --out "$OUT/probe/$g" --json > "$OUT/probe/$g.json"
     echo "probe $g: $k seed(s) done" >&2
   done
 done
@@ -70,7 +74,7 @@ if [[ "${SKIP_REAL:-0}" != 1 ]]; then
       if [[ "$(basename "$f" | cut -c1-9)" == "$r" ]]; then eval_args+=(--eval "array:$f"); else train_args+=(--train "array:$f"); fi
     done
     "$ASSIST3D" probe "${train_args[@]}" "${eval_args[@]}" --steps "$STEPS" --seeds "$SEEDS" --threads "$THREADS" \
-      --loader-workers "$LOADER_WORKERS" --out "$OUT/probe/real-loro/$r" --json > "$OUT/probe/real-loro/$r.json"
+      --loader-workers "$LOADER_WORKERS" "${CONFIG_ARGS[@]}" --out "$OUT/probe/real-loro/$r" --json > "$OUT/probe/real-loro/$r.json"
   done
 fi
 

@@ -5,11 +5,16 @@
 #
 #   scripts/real_loro.sh DEV_DIR OUT_DIR            # env: STEPS (200), SEEDS (3), PAR (folds at once, 1),
 #                                                   #      PROBE_ARGS (extra probe flags, e.g. "--device cuda")
+#                                                   #      PROBE_CONFIG (configs/segmenter-pre-ema.yaml, the
+#                                                   #      published rows' recipe; "" for today's defaults)
 set -euo pipefail
 DEV=${1:?usage: scripts/real_loro.sh DEV_DIR OUT_DIR}
 OUT=${2:?usage: scripts/real_loro.sh DEV_DIR OUT_DIR}
 STEPS=${STEPS:-200}; SEEDS=${SEEDS:-3}; PAR=${PAR:-1}
 ASSIST3D=${ASSIST3D:-assist3d}
+PROBE_CONFIG=${PROBE_CONFIG-$(cd "$(dirname "$0")/.." && pwd)/configs/segmenter-pre-ema.yaml}
+CONFIG_ARGS=()
+if [[ -n "$PROBE_CONFIG" ]]; then CONFIG_ARGS=(--config "$PROBE_CONFIG"); fi
 mkdir -p "$OUT"
 rooms=$(ls "$DEV"/*.npy | xargs -n1 basename | cut -c1-9 | sort -u)
 fold() {
@@ -19,7 +24,7 @@ fold() {
   done
   # shellcheck disable=SC2086
   $ASSIST3D probe "${train_args[@]}" "${eval_args[@]}" --steps "$STEPS" --seeds "$SEEDS" ${PROBE_ARGS:-} \
-    --out "$OUT/$r" --json > "$OUT/$r.json" 2> "$OUT/$r.log"
+    "${CONFIG_ARGS[@]}" --out "$OUT/$r" --json > "$OUT/$r.json" 2> "$OUT/$r.log"
   echo "fold $r done" >&2
 }
 n=0

@@ -5,6 +5,9 @@
 #   scripts/train_shipped.sh ASSETS OUT_DIR          # env: STEPS (1200), N0 (60), N1 (180),
 #                                                    #      DEV (../shared/data/real/dev),
 #                                                    #      EXTRA (../shared/data/real/scannet_scene0451_01.npy)
+#                                                    #      PROBE_CONFIG (configs/segmenter-pre-ema.yaml, the
+#                                                    #      recipe of the documented candidates; "" for today's
+#                                                    #      defaults, with weight averaging)
 #
 # ASSETS is an asset library (docs/metrics.md: the 702-class Sweet Home 3D + procedural catalog).
 # Two ASSIST-3D datasets are generated, N0 scenes with dataset seed 0 (the 60-scene set of the
@@ -20,11 +23,14 @@ EXTRA=${EXTRA:-../shared/data/real/scannet_scene0451_01.npy}
 ASSIST3D=${ASSIST3D:-assist3d}
 PYTHON=${PYTHON:-python}
 HERE=$(cd "$(dirname "$0")" && pwd)
+PROBE_CONFIG=${PROBE_CONFIG-$HERE/../configs/segmenter-pre-ema.yaml}
+CONFIG_ARGS=()
+if [[ -n "$PROBE_CONFIG" ]]; then CONFIG_ARGS=(--config "$PROBE_CONFIG"); fi
 mkdir -p "$OUT"
 # generate skips the scenes a folder already holds, so a re-run only finishes what is missing
 $ASSIST3D generate --out "$OUT/data-s0" --num-scenes "$N0" --seed 0 --preset assist3d --workers 2 --assets "$ASSETS"
 $ASSIST3D generate --out "$OUT/data-s1" --num-scenes "$N1" --seed 1 --preset assist3d --workers 2 --assets "$ASSETS"
 $ASSIST3D probe --train "assist3d:$OUT/data-s0" --train "assist3d:$OUT/data-s1" --eval "array:$DEV" \
-  --steps "$STEPS" --seeds 1 --out "$OUT/probe" --json > "$OUT/probe.json"
+  --steps "$STEPS" --seeds 1 "${CONFIG_ARGS[@]}" --out "$OUT/probe" --json > "$OUT/probe.json"
 $PYTHON "$HERE/hybrid_eval.py" "$OUT/probe/seed_0/model.pt" --eval "array:$DEV" --eval "array:$EXTRA" \
   --out "$OUT/hybrid.json"

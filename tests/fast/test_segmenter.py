@@ -220,8 +220,35 @@ def test_weight_average_resumes_exactly_and_follows_its_formula(tiny_scenes, tmp
     train_mod.update_ema(a, b, 0.9, 1000)
     assert torch.allclose(next(a.parameters()), 0.9 * (0.1 * pa + 0.9 * pb) + 0.1 * pb)
     # a run without averaging stores none
-    train_segmenter(parse_segmenter_config(TINY_NET), tiny_scenes, tmp_path / "plain", seed=3, budget=Budget(steps=1))
+    plain = parse_segmenter_config({**TINY_NET, "optim": {**TINY_NET["optim"], "ema_decay": 0.0}})
+    train_segmenter(plain, tiny_scenes, tmp_path / "plain", seed=3, budget=Budget(steps=1))
     assert load_segmenter(tmp_path / "plain" / "last.pt").ema_state is None
+
+
+def test_files_from_before_weight_averaging_keep_their_recipe(tmp_path):
+    """ema_decay became the default (0.99) after models and probe folders were written without the
+    key: those must read as trained without averaging, not take the new default."""
+    from assist3d.learn.segmenter.probe import ProbeRequest, _check_request
+    assert parse_segmenter_config(None).optim.ema_decay == 0.99
+    pre = parse_segmenter_config({**TINY_NET, "optim": {**TINY_NET["optim"], "ema_decay": 0.0}})
+    save_segmenter(tmp_path / "m.pt", Segmenter(pre.net), pre)
+    payload = torch.load(tmp_path / "m.pt", weights_only=True)
+    old_cfg = json.loads(payload["config"])
+    del old_cfg["optim"]["ema_decay"]
+    payload["config"] = json.dumps(old_cfg)
+    torch.save(payload, tmp_path / "old.pt")
+    assert load_segmenter(tmp_path / "old.pt").config == pre
+    # a probe folder started before the change: finished with the old recipe, refused with the new one
+    req = ProbeRequest(train=("a",), eval=("b",), budget=Budget(steps=2), seeds=1, config=pre)
+    old = req.as_dict()
+    del old["config"]["optim"]["ema_decay"]
+    (tmp_path / "probe.json").write_text(json.dumps(old))
+    _check_request(tmp_path, req)
+    assert "ema_decay" in json.loads((tmp_path / "probe.json").read_text())["config"]["optim"]
+    (tmp_path / "probe.json").write_text(json.dumps(old))
+    new = ProbeRequest(train=("a",), eval=("b",), budget=Budget(steps=2), seeds=1, config=parse_segmenter_config(TINY_NET))
+    with pytest.raises(ConfigError, match="segmenter-pre-ema.yaml"):
+        _check_request(tmp_path, new)
 
 
 def test_extra_loggers_get_the_rows_of_the_csv_log(tiny_scenes, tmp_path, one_thread):

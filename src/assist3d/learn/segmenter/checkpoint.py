@@ -38,7 +38,7 @@ import torch.nn.functional as F
 
 from ...core.errors import DataError
 from ...core.fileio import write_bytes_atomic
-from .config import SegmenterConfig, parse_segmenter_config
+from .config import SegmenterConfig, legacy_config, parse_segmenter_config
 from .model import Network, Segmenter, SegmenterEnsemble
 
 FORMAT = "assist3d-segmenter"
@@ -166,7 +166,7 @@ def load_segmenter(path: str | Path, device: str = "cpu") -> LoadedSegmenter:
     if payload.get("version") not in (VERSION, VERSION_INT8):
         raise DataError(f"{path}: segmenter checkpoint version {payload.get('version')!r}; "
                         f"this assist3d reads {VERSION} and {VERSION_INT8}")
-    cfg = parse_segmenter_config(_json(path, payload, "config"), f"{path} config")
+    cfg = parse_segmenter_config(legacy_config(_json(path, payload, "config")), f"{path} config")
     meta = _json(path, payload, "meta")
     state = payload.get("state_dict")
     if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor) for v in state.values()):

@@ -7,7 +7,7 @@ offset-shifted connected components for instances.
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import Field
 
@@ -66,8 +66,9 @@ class OptimConfig(Section):
     batch_size: int = Field(2, ge=1, le=64, description="scenes per step")
     offset_weight: float = Field(1.0, ge=0.0)
     direction_weight: float = Field(0.5, ge=0.0)
-    ema_decay: float = Field(0.0, ge=0.0, lt=1.0, description="exponential moving average of the weights, kept "
-                             "beside the trained ones and used as the final model (0 = off; e.g. 0.99)")
+    ema_decay: float = Field(0.99, ge=0.0, lt=1.0, description="exponential moving average of the weights, kept "
+                             "beside the trained ones and used as the final model (0 = off; default since "
+                             "2026-11-27 by the probe, docs/fidelity.md 'Weight averaging')")
 
 
 class SegmenterConfig(Section):
@@ -75,6 +76,15 @@ class SegmenterConfig(Section):
     augment: AugmentConfig = Field(default_factory=AugmentConfig)
     cluster: ClusterConfig = Field(default_factory=ClusterConfig)
     optim: OptimConfig = Field(default_factory=OptimConfig)
+
+
+def legacy_config(data: Any) -> Any:
+    """A stored configuration (checkpoint, ``probe.json``) written before ``optim.ema_decay`` existed
+    describes a run without weight averaging: complete it so, not with today's default, so that its
+    recipe reads true and a resumed run stays what it was. Anything else is returned unchanged."""
+    if isinstance(data, dict) and isinstance(data.get("optim"), dict) and "ema_decay" not in data["optim"]:
+        return {**data, "optim": {**data["optim"], "ema_decay": 0.0}}
+    return data
 
 
 def parse_segmenter_config(data: dict | None, source: str = "<dict>") -> SegmenterConfig:
