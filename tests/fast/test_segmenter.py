@@ -591,3 +591,13 @@ def test_segmenter_config_sizes_have_bounds():
         with pytest.raises(ConfigError):
             parse_segmenter_config(bad)
     assert parse_segmenter_config({"net": {"enc_channels": [16, 32, 64, 1024]}}).net.enc_channels[3] == 1024
+
+
+def test_the_documented_segmenter_config_is_the_defaults_and_names_every_key():
+    """configs/segmenter.yaml is what users copy: it must list every key at its default value."""
+    import yaml
+    from assist3d.learn.segmenter.config import SegmenterConfig
+    data = yaml.safe_load((Path(__file__).parents[2] / "configs" / "segmenter.yaml").read_text())
+    assert parse_segmenter_config(data) == SegmenterConfig()
+    defaults = SegmenterConfig().model_dump()
+    assert {k: set(v) for k, v in data.items()} == {k: set(v) for k, v in defaults.items()}

@@ -24,7 +24,7 @@ class NetConfig(Section):
 
     voxel_size: float = Field(0.05, gt=0.005, le=0.5, description="voxel edge in metres")
     use_color: bool = Field(False, description="append RGB to the geometric input features")
-    stem_channels: int = Field(16, ge=4, le=256)
+    stem_channels: int = Field(16, ge=4, le=256, description="channels of the first convolution")
     enc_channels: tuple[Channels, Channels, Channels, Channels] = Field((16, 32, 64, 96), description="4 to 1024 each")
     enc_blocks: tuple[Blocks, Blocks, Blocks, Blocks] = Field((1, 1, 1, 1), description="1 to 8 each")
     dec_channels: tuple[Channels, Channels, Channels, Channels] = Field((96, 64, 48, 48), description="4 to 1024 each")
@@ -61,11 +61,13 @@ class ClusterConfig(Section):
 
 
 class OptimConfig(Section):
+    """Loss weights and the optimiser (Adam; the loss is foreground BCE + weighted offset terms)."""
+
     lr: float = Field(2e-3, gt=0.0, le=1.0, description="Adam peak learning rate (cosine decay to 1 %)")
-    weight_decay: float = Field(1e-4, ge=0.0, le=1.0)
+    weight_decay: float = Field(1e-4, ge=0.0, le=1.0, description="Adam's L2 weight decay")
     batch_size: int = Field(2, ge=1, le=64, description="scenes per step")
-    offset_weight: float = Field(1.0, ge=0.0)
-    direction_weight: float = Field(0.5, ge=0.0)
+    offset_weight: float = Field(1.0, ge=0.0, description="weight of the L1 loss on centre offsets (object voxels)")
+    direction_weight: float = Field(0.5, ge=0.0, description="weight of the offset direction loss (minus cosine)")
     ema_decay: float = Field(0.99, ge=0.0, lt=1.0, description="exponential moving average of the weights, kept "
                              "beside the trained ones and used as the final model (0 = off; default since "
                              "2026-11-27 by the probe, docs/fidelity.md 'Weight averaging')")
