@@ -210,7 +210,9 @@ def test_weight_average_resumes_exactly_and_follows_its_formula(tiny_scenes, tmp
     train_segmenter(cfg, tiny_scenes, tmp_path / "cut", seed=3, budget=Budget(steps=4))
     full, cut = load_segmenter(tmp_path / "full" / "last.pt"), load_segmenter(tmp_path / "cut" / "last.pt")
     assert full.ema_state is not None and all(torch.equal(full.ema_state[k], cut.ema_state[k]) for k in full.ema_state)
-    live = full.model.state_dict()
+    # a training file's model is the average (what segment --checkpoint last.pt uses); "live" is the optimiser's
+    assert all(torch.equal(v, full.ema_state[k]) for k, v in full.model.state_dict().items())
+    live = load_segmenter(tmp_path / "full" / "last.pt", weights="live").model.state_dict()
     assert any(not torch.allclose(full.ema_state[k], live[k]) for k in live if live[k].is_floating_point())
     # the formula, with its warm-up: at step 0 the decay is min(0.9, 1/10) = 0.1
     a, b = Segmenter(cfg.net), Segmenter(cfg.net)

@@ -10,7 +10,8 @@ Keys: ``format`` (``"assist3d-segmenter"``), ``version``, ``config`` (JSON of
 for resumable training files only, ``optimizer`` and ``progress`` (JSON).
 
 Training files of a run with ``optim.ema_decay`` also hold ``ema_state_dict``, the averaged weights
-(float32 tensors), which become the trained model (``LoadedSegmenter.ema_state``).
+(float32 tensors): they are the trained model, so :func:`load_segmenter` builds the model from them
+(``weights="live"``, for resuming, gives the optimiser's weights; both are kept in ``LoadedSegmenter``).
 
 Precision (``save_segmenter(precision=...)``): float32 (training files), float16, or int8. int8
 files (version 2) store every weight matrix or convolution kernel of at least ``INT8_MIN_NUMEL``
@@ -48,10 +49,13 @@ INT8_BLOCK = 64
 INT8_MIN_NUMEL = 1024
 
 Precision = Literal["float32", "float16", "int8"]
+Weights = Literal["trained", "live"]
 
 
 @dataclass
 class LoadedSegmenter:
+    """``model`` is in eval mode; ``ema_state`` holds a training file's averaged weights, if any."""
+
     model: Network
     config: SegmenterConfig
     meta: dict[str, Any]
@@ -145,8 +149,12 @@ def _dequantized(path: Path, state: dict[str, torch.Tensor], scales: Any) -> dic
     return out
 
 
-def load_segmenter(path: str | Path, device: str = "cpu") -> LoadedSegmenter:
-    """Read a checkpoint safely and build its model in eval mode; one-line :class:`DataError` otherwise."""
+def load_segmenter(path: str | Path, device: str = "cpu", weights: Weights = "trained") -> LoadedSegmenter:
+    """Read a checkpoint safely and build its model in eval mode; one-line :class:`DataError` otherwise.
+
+    ``weights="trained"`` builds the model a run produced: the averaged weights when the file holds
+    them (a training file of a run with ``optim.ema_decay``), else its weights; ``"live"`` builds the
+    optimiser's weights (resuming a run)."""
     path = Path(path)
     if not path.is_file():
         raise DataError(f"{path}: checkpoint not found" + (" (it is a folder)" if path.is_dir() else ""))
@@ -184,6 +192,8 @@ def load_segmenter(path: str | Path, device: str = "cpu") -> LoadedSegmenter:
     if ema is not None and (not isinstance(ema, dict) or set(ema) != set(state)
                             or not all(isinstance(v, torch.Tensor) and v.shape == state[k].shape for k, v in ema.items())):
         raise DataError(f"{path}: its averaged weights (ema_state_dict) do not match its model's")
+    if ema is not None and weights == "trained":
+        model.load_state_dict({k: v.float() if v.is_floating_point() else v for k, v in ema.items()})
     return LoadedSegmenter(model=model, config=cfg, meta=meta, optimizer=payload.get("optimizer"), progress=progress,
                            ema_state=ema)
 

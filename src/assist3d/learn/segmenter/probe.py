@@ -190,9 +190,7 @@ def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", lo
                                   meta={"train": list(req.train)}, device=device,
                                   loader_workers=loader_workers,
                                   on_step=lambda row: emit("step", {"seed": seed, **row}))
-            loaded = load_segmenter(rec.checkpoint)
-            if loaded.ema_state is not None:  # optim.ema_decay: the averaged weights are the trained model
-                loaded.model.load_state_dict(loaded.ema_state)
+            loaded = load_segmenter(rec.checkpoint)  # with optim.ema_decay: the averaged weights
             save_segmenter(model_path, loaded.model, req.config,
                            meta=loaded.meta | ({"weights": "ema"} if loaded.ema_state is not None else {}))
         meta = load_segmenter(model_path).meta

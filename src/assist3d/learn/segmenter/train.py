@@ -131,7 +131,7 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
     ema = copy.deepcopy(model).requires_grad_(False) if cfg.optim.ema_decay > 0 else None
     step, seconds, last_loss = 0, 0.0, float("nan")
     if last.is_file():
-        loaded = load_segmenter(last, device)
+        loaded = load_segmenter(last, device, weights="live")
         if loaded.config != cfg:
             raise ConfigError(f"{last}: was trained with another configuration; use a new output folder")
         model.load_state_dict(loaded.model.state_dict())
