@@ -80,13 +80,26 @@ class SegmenterConfig(Section):
     optim: OptimConfig = Field(default_factory=OptimConfig)
 
 
+# Keys added with a default other than the behaviour before them: (section, key) -> that behaviour.
+# A key missing from a stored configuration otherwise takes today's default (pydantic), which is
+# right for every key whose default reproduces what came before it.
+BEFORE_ADDED: dict[tuple[str, str], Any] = {("optim", "ema_decay"): 0.0}  # no weight averaging
+
+
 def legacy_config(data: Any) -> Any:
-    """A stored configuration (checkpoint, ``probe.json``) written before ``optim.ema_decay`` existed
-    describes a run without weight averaging: complete it so, not with today's default, so that its
-    recipe reads true and a resumed run stays what it was. Anything else is returned unchanged."""
-    if isinstance(data, dict) and isinstance(data.get("optim"), dict) and "ema_decay" not in data["optim"]:
-        return {**data, "optim": {**data["optim"], "ema_decay": 0.0}}
-    return data
+    """A stored configuration (checkpoint, ``probe.json``) completed with the values of
+    :data:`BEFORE_ADDED` for the keys it lacks, so that a file written before such a key existed
+    keeps its recipe and a resumed run stays what it was; returned unchanged (the same object) when
+    nothing is missing."""
+    if not isinstance(data, dict):
+        return data
+    missing = [(s, k) for s, k in BEFORE_ADDED if isinstance(data.get(s), dict) and k not in data[s]]
+    if not missing:
+        return data
+    out = {s: dict(v) if isinstance(v, dict) else v for s, v in data.items()}
+    for s, k in missing:
+        out[s][k] = BEFORE_ADDED[(s, k)]
+    return out
 
 
 def parse_segmenter_config(data: dict | None, source: str = "<dict>") -> SegmenterConfig:
