@@ -140,6 +140,30 @@ def test_no_import_cycle():
     assert _cycles(graph) == []
 
 
+def _folders(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+    """The module-level graph between the package's top-level folders (``assist3d.scene``,
+    ``assist3d.placement``, ...): an edge wherever a module of one imports a module of another."""
+    def top(m: str) -> str:
+        return ".".join(m.split(".")[:2])
+    out: dict[str, set[str]] = {top(m): set() for m in graph}
+    for m, ts in graph.items():
+        out[top(m)] |= {top(t) for t in ts if top(t) != top(m)}
+    return out
+
+
+def test_no_import_cycle_between_folders():
+    """Folders stack: none imports, at module level, a folder that imports it back (docs/architecture.md,
+    "Restructure history"; scene/ and placement/ did while their shared geometry lived in scene/)."""
+    graph, _ = _imports()
+    assert _cycles(_folders(graph)) == []
+
+
+def test_folder_graph_joins_modules_of_one_folder():
+    graph = {"assist3d.scene.layout": {"assist3d.placement"}, "assist3d.placement": {"assist3d.scene.geometry"},
+             "assist3d.scene.geometry": set(), "assist3d.scene": set()}
+    assert _cycles(_folders(graph)) == [["assist3d.placement", "assist3d.scene"]]
+
+
 def test_imports_inside_functions_follow_the_rule():
     _, local = _imports()
     bad = [f"{m}:{line} imports {t}" for m, t, line in local if not _allowed(m, t)]

@@ -13,7 +13,7 @@ import shapely
 from assist3d.config import LayoutConfig
 from assist3d.core.contracts import Relation
 from assist3d.core.errors import PlacementError
-from assist3d.scene.geometry import room_polygon, wall_segments
+from assist3d.core.geometry import room_polygon, wall_segments
 from assist3d.placement import place_group, place_group_random
 from assist3d.placement.scoring import Candidates, TargetBox, relation_score
 from assist3d.planning.relations import PlanRequest

@@ -10,7 +10,7 @@ import shapely
 
 from assist3d.assets.catalog import Catalog
 from assist3d.core.contracts import AssetRecord, MeshData, Opening, PlacedInstance, Relation, Room, SupportSurface
-from assist3d.scene.geometry import rect_corners
+from assist3d.core.geometry import rect_corners
 from assist3d.planning.relations import GroupPlan, PlannedObject, PlanRequest
 
 

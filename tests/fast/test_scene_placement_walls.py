@@ -8,7 +8,7 @@ import pytest
 
 from assist3d.config import LayoutConfig
 from assist3d.core.contracts import PlacedInstance, Relation
-from assist3d.scene.geometry import pose_matrix, wall_segments, world_bounds
+from assist3d.core.geometry import pose_matrix, wall_segments, world_bounds
 from assist3d.placement import place_group
 from assist3d.planning.relations import PlanRequest
 

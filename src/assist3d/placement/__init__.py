@@ -19,7 +19,7 @@ from ..config import LayoutConfig
 from ..core.contracts import DroppedObject, PlacedInstance
 from ..core.errors import PlacementError
 from ..planning.relations import GroupPlan, PlanRequest, group_kind
-from ..scene.geometry import pose_matrix
+from ..core.geometry import pose_matrix
 from .common import Item, relations_for_instance, resolve_plan
 from .floor import FloorProblem
 from .ontop import OnTopProblem

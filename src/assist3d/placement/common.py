@@ -9,7 +9,7 @@ import numpy as np
 
 from ..core.contracts import AssetRecord, PlacedInstance, Relation
 from ..planning.relations import CROSS_GROUP, RELATIONS, GroupPlan, PlanRequest, review_plan
-from ..scene.geometry import pose_xyz_yaw
+from ..core.geometry import pose_xyz_yaw
 from .scoring import SATISFIED, Candidates, TargetBox, relation_score
 from .search import Choice
 

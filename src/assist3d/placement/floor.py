@@ -22,7 +22,7 @@ from scipy import ndimage
 
 from ..config import LayoutConfig
 from ..core.contracts import Room
-from ..scene.geometry import along_walls, room_polygon, rotated_half_extents, wall_segments
+from ..core.geometry import along_walls, room_polygon, rotated_half_extents, wall_segments
 from .common import PRIOR_WEIGHT, Item, RelationState, order_candidates
 from .scoring import Candidates, TargetBox
 from .search import Choice

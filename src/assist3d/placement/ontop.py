@@ -19,7 +19,7 @@ import shapely
 
 from ..config import LayoutConfig
 from ..core.contracts import MeshData, PlacedInstance, Room, SupportSurface
-from ..scene.geometry import InstanceBoxes, boxes_collide, pose_xyz_yaw, world_bounds
+from ..core.geometry import InstanceBoxes, boxes_collide, pose_xyz_yaw, world_bounds
 from .common import Item, MovingBoxesMixin, RelationState, order_candidates, target_box
 from .scoring import Candidates
 from .search import Choice

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.contracts import AssetRecord, DroppedObject, PlacedInstance, Room
-from ..scene.geometry import InstanceBoxes, obb_overlap, pose_matrix, rect_corners, rects_in_polygon, room_polygon
+from ..core.geometry import InstanceBoxes, obb_overlap, pose_matrix, rect_corners, rects_in_polygon, room_polygon
 
 TRIES = 64
 

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene.geometry import box_gap, rotated_half_extents
+from ..core.geometry import box_gap, rotated_half_extents
 
 SATISFIED = 0.5
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..config import LayoutConfig
 from ..core.contracts import PlacedInstance, Room
-from ..scene.geometry import (InstanceBoxes, along_walls, footprints_overlap, rect_corners, rects_in_polygon, room_polygon,
+from ..core.geometry import (InstanceBoxes, along_walls, footprints_overlap, rect_corners, rects_in_polygon, room_polygon,
                         wall_segments, z_overlap)
 from .common import PRIOR_WEIGHT, Item, MovingBoxesMixin, RelationState, order_candidates, target_box
 from .scoring import Candidates

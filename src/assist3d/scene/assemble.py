@@ -12,7 +12,7 @@ import numpy as np
 from ..assets.catalog import Catalog
 from ..core.contracts import MeshData, SceneLayout, SceneMesh
 from ..core.errors import AssetError
-from .geometry import transform_points
+from ..core.geometry import transform_points
 from .shell import build_shell, opening_meshes
 
 log = logging.getLogger(__name__)

@@ -35,9 +35,9 @@ import shapely
 
 from ..assets.catalog import Catalog
 from ..core.contracts import MeshData, PlacedInstance, SceneLayout
+from ..core.geometry import footprint_polygon, pose_xyz_yaw, room_polygon, wall_segments
 from ..placement.surface import distinct_counts
 from .assemble import instance_meshes
-from .geometry import footprint_polygon, pose_xyz_yaw, room_polygon, wall_segments
 
 log = logging.getLogger(__name__)
 

@@ -8,7 +8,7 @@ import numpy as np
 from trimesh import creation
 
 from ..core.contracts import MeshData, Room
-from .geometry import room_polygon, wall_segments
+from ..core.geometry import room_polygon, wall_segments
 
 FLOOR_COLOR = (156, 134, 110)
 WALL_COLOR = (222, 218, 208)

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from ..core.contracts import PlacedInstance, Room
-from ..core.errors import PlacementError
+from .contracts import PlacedInstance, Room
+from .errors import PlacementError
 
 __all__ = [
     "pose_matrix", "pose_xyz_yaw", "transform_points", "rotated_half_extents", "rect_corners",
