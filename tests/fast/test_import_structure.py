@@ -1,8 +1,9 @@
 """The package's import structure (docs/architecture.md, "Imports"): no import cycle between modules
 (importing ``a.b.c`` also runs the ``__init__`` of ``a.b``) nor between the top-level folders, an
 import inside a function only where the rule allows one (an optional extra, a documented heavy
-module, or, in ``assist3d.cli`` only, the stage module a command runs), and the layering: ``core`` imports nothing else of the package;
-generation never imports the learning side (``learn``) or the benchmarking side (``bench``)."""
+module, or, in ``assist3d.cli`` only, the stage module a command runs), and the layering: ``core``
+imports nothing else of the package; generation never imports the learning side (``learn``) or the
+benchmarking side (``bench``)."""
 
 from __future__ import annotations
 

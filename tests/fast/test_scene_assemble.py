@@ -7,10 +7,10 @@ import pytest
 
 from assist3d.config import LayoutConfig
 from assist3d.core.contracts import PlacedInstance, SceneLayout
+from assist3d.core.geometry import pose_matrix
 from assist3d.export.glb import export_glb
 from assist3d.scene.assemble import assemble_scene
 from assist3d.scene.checks import check_layout
-from assist3d.core.geometry import pose_matrix
 from assist3d.placement import place_group
 from assist3d.planning.relations import PlanRequest
 from assist3d.scene.shell import build_shell

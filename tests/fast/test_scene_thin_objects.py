@@ -8,8 +8,8 @@ import pytest
 from assist3d.assets.catalog import Catalog
 from assist3d.config import GenerateConfig
 from assist3d.core.contracts import AssetRecord, MeshData, SupportSurface
-from assist3d.scene.checks import check_layout, check_siblings
 from assist3d.core.geometry import z_overlap
+from assist3d.scene.checks import check_layout, check_siblings
 from assist3d.scene.layout import build_layout
 
 trimesh = pytest.importorskip("trimesh")
