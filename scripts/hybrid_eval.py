@@ -9,7 +9,9 @@ components and the superpoints do not depend on the model and are computed once 
 Rows: ``geometric`` and ``geometric+snap`` (no model; the control), then per model ``learned``
 (what ``assist3d probe`` scores), ``hybrid`` (what ``assist3d segment`` does by default),
 ``hybrid_v1`` (the first hybrid recipe, without the fallback proposals) and ``hybrid+stability``
-(the stability ranking, measured and not adopted; see ``learn/segmenter/hybrid.py``). ``--tta``
+(the stability ranking, measured and not adopted; see ``learn/segmenter/hybrid.py``),
+``hybrid+drop_structure`` and ``learned+drop_structure`` (the network's instances linked without the
+voxels on the geometric reference's structural planes; ``HybridConfig.drop_structure``). ``--tta``
 adds ``learned+tta`` and ``hybrid+tta``: the same with the network's outputs averaged over 8 copies
 of each scan (4 quarter turns about z, with and without a mirror; ``infer.predict_voxels_tta``).
 AP50 is over the scans of the first --eval spec; each further spec is reported on its own.
@@ -32,8 +34,8 @@ from assist3d.bench.evaluation.ap import match_scene, summarize
 from assist3d.core.fileio import write_json_atomic
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.features import voxel_features, voxelize
-from assist3d.learn.segmenter.geometric import segment_geometric
-from assist3d.learn.segmenter.hybrid import HybridConfig, combine
+from assist3d.learn.segmenter.geometric import segment_geometric, structural_points
+from assist3d.learn.segmenter.hybrid import HybridConfig, combine, structure_voxels
 from assist3d.learn.segmenter.infer import instances, predict_voxels, predict_voxels_tta
 from assist3d.learn.segmenter.superpoints import snap_masks, superpoints
 
@@ -43,6 +45,7 @@ VARIANTS = {
     "hybrid": HybridConfig(),
     "hybrid_v1": HybridConfig(fallback_radius=None),
     "hybrid+stability": HybridConfig(stability_radii=STABILITY_RADII),
+    "hybrid+drop_structure": HybridConfig(drop_structure=True),
 }
 
 
@@ -64,23 +67,24 @@ def main() -> None:
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     specs = a.eval or ["array:../shared/data/real/dev", "array:../shared/data/real/scannet_scene0451_01.npy"]
-    scans = []  # (group, scene_id, sample, geometric segmentation, superpoints)
+    scans = []  # (group, scene_id, sample, geometric segmentation, superpoints, points on structural planes)
     for g, spec in enumerate(specs):
         ds = open_dataset(spec)
         for sid in ds.scene_ids:
             s = ds.load(sid)
-            scans.append((g, sid, s, segment_geometric(s.coord), superpoints(s.coord)))
+            on_plane = structural_points(s.coord)
+            scans.append((g, sid, s, segment_geometric(s.coord, on_plane=on_plane), superpoints(s.coord), on_plane))
             print("prepared", sid, flush=True)
 
     def score(preds: list) -> list[dict]:
         groups: list[list] = [[] for _ in specs]
-        for (g, sid, s, _, _), (masks, scores) in zip(scans, preds):
+        for (g, sid, s, *_), (masks, scores) in zip(scans, preds):
             groups[g].append(match_scene(s.instance, masks, scores, valid=s.valid, scene_id=sid))
         return [_metrics(m) for m in groups]
 
     result: dict = {"eval": specs, "control": {}, "models": {}}
-    result["control"]["geometric"] = score([(geo.masks, geo.scores) for *_, geo, _ in scans])
-    result["control"]["geometric+snap"] = score([(snap_masks(geo.masks, segs), geo.scores) for *_, geo, segs in scans])
+    result["control"]["geometric"] = score([(geo.masks, geo.scores) for *_, geo, _, _ in scans])
+    result["control"]["geometric+snap"] = score([(snap_masks(geo.masks, segs), geo.scores) for *_, geo, segs, _ in scans])
     for path in a.models:
         t0 = time.perf_counter()
         members = [load_segmenter(p) for p in path.split(",")]
@@ -88,17 +92,21 @@ def main() -> None:
         if any(m.config.net.voxel_size != cfg.net.voxel_size for m in members):
             raise SystemExit(f"{path}: ensemble members must share the voxel size")
         learned: list = []
+        learned_nostruct: list = []
         hybrid: dict[str, list] = {name: [] for name in VARIANTS}
         tta: dict[str, list] = {"learned+tta": [], "hybrid+tta": []}
-        for _, _, s, geo, segs in scans:
+        for _, _, s, geo, segs, on_plane in scans:
             vox = voxelize(s.coord.astype(np.float32), cfg.net.voxel_size, s.color)
             outs = [predict_voxels(m.model, vox.coords, voxel_features(vox, use_color=m.config.net.use_color))
                     for m in members]
             fg, off = np.mean([o[0] for o in outs], 0), np.mean([o[1] for o in outs], 0)
             inst = instances(vox, fg, off, cfg.cluster)
             learned.append((inst.masks, inst.scores))
+            structure = structure_voxels(vox, on_plane)
+            drop = instances(vox, np.where(structure, 0.0, fg), off, cfg.cluster)
+            learned_nostruct.append((drop.masks, drop.scores))
             for name, variant in VARIANTS.items():
-                h = combine(inst, vox, fg, off, cfg.cluster, geo.masks, segs, hybrid=variant)
+                h = combine(inst, vox, fg, off, cfg.cluster, geo.masks, segs, hybrid=variant, structure=structure)
                 hybrid[name].append((h.masks, h.scores))
             if a.tta:
                 outs = [predict_voxels_tta(m.model, m.config, s.coord, s.color, vox) for m in members]
@@ -108,7 +116,8 @@ def main() -> None:
                 h = combine(inst, vox, fg, off, cfg.cluster, geo.masks, segs)
                 tta["hybrid+tta"].append((h.masks, h.scores))
         rows = hybrid | (tta if a.tta else {})
-        result["models"][path] = {"learned": score(learned)} | {name: score(p) for name, p in rows.items()}
+        result["models"][path] = ({"learned": score(learned), "learned+drop_structure": score(learned_nostruct)}
+                                  | {name: score(p) for name, p in rows.items()})
         r = result["models"][path]
         ap50 = {k: " / ".join(f"{x['AP50']:.3f}" for x in v) for k, v in r.items()}
         print(f"{path}: AP50 " + ", ".join(f"{k} {v}" for k, v in ap50.items()) + f" ({time.perf_counter() - t0:.0f} s)",

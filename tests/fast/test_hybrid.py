@@ -14,8 +14,14 @@ from assist3d.learn.segmenter.checkpoint import load_segmenter  # noqa: E402
 from assist3d.learn.segmenter.cluster import mask_nms  # noqa: E402
 from assist3d.learn.segmenter.config import ClusterConfig, parse_segmenter_config  # noqa: E402
 from assist3d.learn.segmenter.features import voxelize  # noqa: E402
-from assist3d.learn.segmenter.geometric import segment_geometric  # noqa: E402
-from assist3d.learn.segmenter.hybrid import HybridConfig, combine, labels_from_masks, segment_hybrid  # noqa: E402
+from assist3d.learn.segmenter.geometric import segment_geometric, structural_points  # noqa: E402
+from assist3d.learn.segmenter.hybrid import (  # noqa: E402
+    HybridConfig,
+    combine,
+    labels_from_masks,
+    segment_hybrid,
+    structure_voxels,
+)
 from assist3d.learn.segmenter.infer import instances  # noqa: E402
 from assist3d.learn.segmenter.model import Segmenter  # noqa: E402
 from assist3d.learn.segmenter.superpoints import snap_masks, superpoints  # noqa: E402
@@ -108,6 +114,55 @@ def test_fallback_proposals_split_touching_objects_below_the_first_proposals():
     assert m[0]["AP50"] == 0.0 < m[1]["AP50"]  # 1/3: the merge, a false positive, still ranks first
 
 
+def test_structure_voxels_take_the_majority_of_their_points():
+    coord = np.array([[0.01, 0.01, 0.01], [0.02, 0.02, 0.02], [0.03, 0.03, 0.03],  # voxel A: 2 of 3 on a plane
+                      [0.11, 0.01, 0.01], [0.12, 0.02, 0.02], [0.13, 0.03, 0.03],  # voxel B: 1 of 3
+                      [0.21, 0.01, 0.01], [0.22, 0.02, 0.02]])  # voxel C: 1 of 2 (not more than half)
+    vox = voxelize(coord, 0.1)
+    on_plane = np.array([1, 1, 0, 1, 0, 0, 1, 0], bool)
+    structure = structure_voxels(vox, on_plane)
+    per_point = structure[vox.inverse]
+    assert per_point.tolist() == [True] * 3 + [False] * 5
+
+
+def test_drop_structure_links_objects_apart_that_a_wall_called_object_joins():
+    # two 20 cm blocks 60 cm apart joined by a row of wall voxels that the network calls object; all
+    # offsets zero, so at a 7 cm link radius the three form one instance
+    block = np.stack(np.meshgrid(np.arange(4), np.arange(4), np.arange(4), indexing="ij"), -1).reshape(-1, 3)
+    wall = np.stack([np.arange(4, 12), np.zeros(8, int), np.zeros(8, int)], 1)
+    cells = np.concatenate([block, wall, block + [12, 0, 0]])
+    coord = cells * 0.05 + 0.025
+    truth = np.concatenate([np.zeros(len(block)), np.full(len(wall), -1), np.ones(len(block))]).astype(np.int64)
+    vox = voxelize(coord, 0.05)
+    fg = np.full(len(vox), 0.9, np.float32)
+    offset = np.zeros((len(vox), 3))
+    on_wall = np.zeros(len(vox), bool)
+    on_wall[vox.inverse[truth == -1]] = True
+    cluster = ClusterConfig()
+    learned = instances(vox, fg, offset, cluster)
+    none = np.zeros((0, len(coord)), bool)
+    own = np.arange(len(coord))
+    default = combine(learned, vox, fg, offset, cluster, none, own, hybrid=HybridConfig(fallback_radius=None))
+    dropped = combine(learned, vox, fg, offset, cluster, none, own, structure=on_wall,
+                      hybrid=HybridConfig(fallback_radius=None, drop_structure=True))
+    assert len(default.masks) == 1 and default.masks[0].all()
+    assert len(dropped.masks) == 2 and not dropped.masks[:, truth == -1].any()
+    assert sorted(set(truth[m]) for m in dropped.masks) == [{0}, {1}]
+    # the learned instances' scores come from the same foreground: equal blocks score the same
+    assert dropped.scores[0] == pytest.approx(dropped.scores[1])
+    with pytest.raises(ValueError, match="structure"):
+        combine(learned, vox, fg, offset, cluster, none, own, hybrid=HybridConfig(drop_structure=True))
+
+
+def test_geometric_with_given_planes_equals_finding_them_and_checks_their_shape(room):
+    on_plane = structural_points(room.coord)
+    assert on_plane.shape == (len(room.coord),) and 0 < on_plane.mean() < 1
+    a, b = segment_geometric(room.coord), segment_geometric(room.coord, on_plane=on_plane)
+    assert np.array_equal(a.masks, b.masks) and np.array_equal(a.scores, b.scores)
+    with pytest.raises(ValueError, match="on_plane has shape"):
+        segment_geometric(room.coord, on_plane=on_plane[:-1])
+
+
 def test_hybrid_on_a_toy_room_returns_ranked_consistent_masks_and_finds_the_boxes(room):
     cfg = parse_segmenter_config(TINY_NET)
     torch.manual_seed(0)
@@ -119,6 +174,9 @@ def test_hybrid_on_a_toy_room_returns_ranked_consistent_masks_and_finds_the_boxe
     assert seg.masks[seg.labels[held], np.flatnonzero(held)].all() and not seg.masks[:, ~held].any()
     m = summarize([match_scene(room.instance, seg.masks, seg.scores, valid=room.valid)])
     assert m["AR"] > 0.7, m.summary  # every box is among the proposals
+    dropped = segment_hybrid(model, cfg, room.coord, room.color, hybrid=HybridConfig(drop_structure=True))
+    assert (np.diff(dropped.scores) <= 0).all()
+    assert summarize([match_scene(room.instance, dropped.masks, dropped.scores, valid=room.valid)])["AR"] > 0.7
 
 
 def test_shipped_model_hybrid_beats_learned_alone_and_the_reference_on_the_real_scan(real_scan_path):

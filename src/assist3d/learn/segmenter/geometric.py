@@ -90,11 +90,27 @@ def remove_planes(xyz: np.ndarray, cfg: GeometricConfig, rng: np.random.Generato
     return removed
 
 
-def segment_geometric(coord: np.ndarray, cfg: GeometricConfig = GeometricConfig()) -> Segmentation:
-    """Planes removed, connected components of the rest; score = larger components first (in (0, 1))."""
+def structural_points(coord: np.ndarray, cfg: GeometricConfig = GeometricConfig()) -> np.ndarray:
+    """(N,) bool: the points of ``coord`` (N, 3) on the room's structural planes (floor, walls,
+    ceiling), as :func:`segment_geometric` removes them (RANSAC on 2 cm voxel centres)."""
     vox = voxelize(np.asarray(coord, np.float32), cfg.voxel_size)
-    rng = np.random.default_rng(cfg.seed)
-    on_plane = remove_planes(vox.centres, cfg, rng)
+    return remove_planes(vox.centres, cfg, np.random.default_rng(cfg.seed))[vox.inverse]
+
+
+def segment_geometric(coord: np.ndarray, cfg: GeometricConfig = GeometricConfig(),
+                      on_plane: np.ndarray | None = None) -> Segmentation:
+    """Planes removed, connected components of the rest; score = larger components first (in (0, 1)).
+    ``on_plane`` (N,) bool, from :func:`structural_points` with the same ``cfg``, saves finding the
+    planes again."""
+    vox = voxelize(np.asarray(coord, np.float32), cfg.voxel_size)
+    if on_plane is None:
+        on_plane = remove_planes(vox.centres, cfg, np.random.default_rng(cfg.seed))
+    else:
+        if np.shape(on_plane) != (len(vox.inverse),):
+            raise ValueError(f"on_plane has shape {np.shape(on_plane)}, expected ({len(vox.inverse)},)")
+        plane_points = np.asarray(on_plane, bool)
+        on_plane = np.zeros(len(vox), bool)
+        on_plane[vox.inverse] = plane_points  # every point of a 2 cm voxel shares its voxel's value
     rows = np.flatnonzero(~on_plane)
     labels = np.full(len(vox), -1, np.int64)
     comp = radius_components(vox.centres[rows], cfg.link_radius)

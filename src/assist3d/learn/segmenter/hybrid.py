@@ -29,6 +29,11 @@ steps 1-2 by ``0.5 + 0.5 x stability``, the mean over those radii of each propos
 the network's instances linked at that radius (a persistence criterion, as in MSER or HDBSCAN): it
 lifted the shipped model's dev AP50 from 0.265 to 0.363 and lowered it for 12 of 28 models.
 
+``HybridConfig.drop_structure`` (off by default) links the network's instances of steps 1 and 3 without
+the 5 cm voxels that lie on the room's structural planes (more than half of their points on a plane
+of the geometric reference): real walls are often called object by the network, and linked through
+them, objects merge. The proposals' scores are unchanged (docs/fidelity.md, "Structural planes").
+
 Masks may overlap (a component can hold two learned instances without an IoU above 0.5 with
 either); ``labels`` gives each point the best-scoring mask that holds it.
 """
@@ -42,7 +47,7 @@ import numpy as np
 from .cluster import instance_score, mask_nms, pairwise_iou
 from .config import ClusterConfig, SegmenterConfig
 from .features import Voxels, voxelize
-from .geometric import GeometricConfig, segment_geometric
+from .geometric import GeometricConfig, segment_geometric, structural_points
 from .infer import Segmentation, instances, predict_scan
 from .model import Network
 from .superpoints import SuperpointConfig, snap_masks, superpoints
@@ -60,6 +65,15 @@ class HybridConfig:
     stability_radii: tuple[float, ...] = ()
     fallback_radius: float | None = 0.05
     nms_iou: float = NMS_IOU
+    drop_structure: bool = False
+
+
+def structure_voxels(vox: Voxels, on_plane: np.ndarray) -> np.ndarray:
+    """(V,) bool: the voxels of ``vox`` with more than half of their points on a structural plane
+    (``on_plane`` (N,) bool per point, from :func:`geometric.structural_points`)."""
+    n = len(vox)
+    on = np.bincount(vox.inverse, np.asarray(on_plane, np.float64), n)
+    return on > 0.5 * np.bincount(vox.inverse, minlength=n)
 
 
 def labels_from_masks(masks: np.ndarray) -> np.ndarray:
@@ -108,15 +122,24 @@ def stability(masks: np.ndarray, vox: Voxels, fg: np.ndarray, offset: np.ndarray
 
 def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, offset: np.ndarray, cluster: ClusterConfig,
             components: np.ndarray, segments: np.ndarray, min_cover: float = SuperpointConfig.min_cover,
-            hybrid: HybridConfig = HybridConfig()) -> Segmentation:
+            hybrid: HybridConfig = HybridConfig(), structure: np.ndarray | None = None) -> Segmentation:
     """Steps 2-5: the network's instances ``learned`` (from :func:`infer.instances` on ``vox`` with
     ``cluster``), its foreground probability ``fg`` (V,) and offsets ``offset`` (V, 3), the geometric
-    components (C, N) bool and the superpoint id (N,) of every point."""
+    components (C, N) bool and the superpoint id (N,) of every point. With ``hybrid.drop_structure``,
+    ``structure`` (V,) bool (:func:`structure_voxels`) is required and the network's instances are
+    linked again without those voxels, in place of ``learned``."""
+    link_fg = fg
+    if hybrid.drop_structure:
+        if structure is None or np.shape(structure) != (len(vox),):
+            raise ValueError(f"drop_structure needs structure of shape ({len(vox)},), got "
+                             f"{None if structure is None else np.shape(structure)}")
+        link_fg = np.where(structure, 0.0, fg).astype(fg.dtype)
+        learned = instances(vox, link_fg, offset, cluster)
     masks, scores = proposals(learned, vox, fg, components)
     if hybrid.stability_radii:
-        scores = scores * (0.5 + 0.5 * stability(masks, vox, fg, offset, cluster, hybrid.stability_radii))
+        scores = scores * (0.5 + 0.5 * stability(masks, vox, link_fg, offset, cluster, hybrid.stability_radii))
     if hybrid.fallback_radius is not None:
-        extra = instances(vox, fg, offset, cluster.model_copy(update={"radius": hybrid.fallback_radius}))
+        extra = instances(vox, link_fg, offset, cluster.model_copy(update={"radius": hybrid.fallback_radius}))
         masks = np.concatenate([masks, extra.masks])
         scores = np.concatenate([(1.0 + scores) / 2.0, extra.scores.astype(np.float64) / 2.0])
     keep = mask_nms(masks, scores, hybrid.nms_iou)
@@ -137,6 +160,7 @@ def segment_hybrid(model: Network, cfg: SegmenterConfig, coord: np.ndarray, colo
         color = np.full((len(coord), 3), 128, np.uint8)
     vox = voxelize(coord, cfg.net.voxel_size, color)
     fg, offset = predict_scan(model, cfg, coord, color, vox, tta=tta, device=device)
+    on_plane = structural_points(coord, geometric)
     return combine(instances(vox, fg, offset, cfg.cluster), vox, fg, offset, cfg.cluster,
-                   segment_geometric(coord, geometric).masks, superpoints(coord, superpoint), superpoint.min_cover,
-                   hybrid)
+                   segment_geometric(coord, geometric, on_plane).masks, superpoints(coord, superpoint),
+                   superpoint.min_cover, hybrid, structure_voxels(vox, on_plane))
