@@ -17,7 +17,7 @@ from assist3d.learn.segmenter.geometric import GeometricConfig, remove_planes
 from assist3d.learn.segmenter.infer import predict_voxels
 
 torch.set_num_threads(1)
-SPECS = ["array:/work/shared/data/real/dev", "array:/work/shared/data/real/scannet_scene0451_01.npy"]
+SPECS = ["array:../shared/data/real/dev", "array:../shared/data/real/scannet_scene0451_01.npy"]
 
 
 def group(vox, fgp, keep, radius, min_vox, off):
