@@ -180,8 +180,8 @@ def test_the_command_line_answers_a_file_where_a_folder_is_expected_in_one_line(
 def test_generate_fault_mid_run_says_what_is_complete_and_keeps_it(tmp_path, monkeypatch):
     """An OSError while writing scene 1 of 3: scene 0 stays complete, scene 1's half-written
     folder goes, and the message counts the complete scenes and says how to resume."""
-    from assist3d import pipeline
     from assist3d.export import writer
+    from assist3d.pipeline import scene as pipeline_scene
 
     real = writer.write_scene
 
@@ -192,7 +192,7 @@ def test_generate_fault_mid_run_says_what_is_complete_and_keeps_it(tmp_path, mon
             raise OSError(errno.ENOSPC, "No space left on device", str(Path(scene_dir) / "color.npy"))
         return real(scene_dir, *a, **kw)
 
-    monkeypatch.setattr(pipeline, "write_scene", full_at_scene_1)
+    monkeypatch.setattr(pipeline_scene, "write_scene", full_at_scene_1)
     out = tmp_path / "data"
     with pytest.raises(FaultError) as err:
         generate_dataset(parse_config(TINY), out, range(3))

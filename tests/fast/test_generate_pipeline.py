@@ -189,7 +189,7 @@ def test_a_second_writer_on_the_same_folder_is_refused(full_run):
 
 
 def test_a_failing_scene_is_reported_and_retried_by_the_next_run(full_run, tmp_path, monkeypatch):
-    import assist3d.pipeline as pipeline_mod
+    import assist3d.pipeline.scene as pipeline_mod
     from assist3d.core.errors import PlacementError
 
     real = pipeline_mod.build_layout

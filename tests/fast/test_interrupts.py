@@ -169,7 +169,7 @@ def test_the_worker_pool_stops_its_workers_on_an_interrupt():
 
 def test_the_lock_file_goes_with_the_run_and_a_second_writer_is_refused(tmp_path):
     from assist3d.core.errors import DataError
-    from assist3d.pipeline import _folder_lock
+    from assist3d.pipeline.dataset import _folder_lock
 
     with _folder_lock(tmp_path):
         assert (tmp_path / ".generate.lock").is_file()
