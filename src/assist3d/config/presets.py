@@ -9,7 +9,8 @@ from __future__ import annotations
 import difflib
 from pathlib import Path
 
-from . import GenerateConfig, merge_config, parse_config, read_config_file
+from .files import merge_config, parse_config, read_config_file
+from .sections import GenerateConfig
 from ..core.errors import ConfigError
 from ..core.taxonomy.roomtypes import template_classes
 
