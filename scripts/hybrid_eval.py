@@ -14,7 +14,8 @@ Rows: ``geometric`` and ``geometric+snap`` (no model; the control), then per mod
 voxels on the geometric reference's structural planes; ``HybridConfig.drop_structure``). ``--tta``
 adds ``learned+tta`` and ``hybrid+tta``: the same with the network's outputs averaged over 8 copies
 of each scan (4 quarter turns about z, with and without a mirror; ``infer.predict_voxels_tta``).
-AP50 is over the scans of the first --eval spec; each further spec is reported on its own.
+AP50 is over the scans of the first --eval spec; each further spec is reported on its own; every
+row also holds its per-scan AP / AP50 / AP25 (``scans``) for ``scripts/compare_probes.py``.
 A MODEL argument of comma-joined files (``A.pt,B.pt``) is a seed ensemble: the foreground
 probabilities and offsets of its members are averaged before the rows above are formed (members must
 share the voxel size; the first member's clustering settings are used).
@@ -54,7 +55,8 @@ def _metrics(matches: list) -> dict:
     rooms = sorted({m.scene_id[:ROOM_CHARS] for m in matches})
     per_room = {r: round(float(np.mean([summarize([m])["AP50"] for m in matches if m.scene_id.startswith(r)])), 4)
                 for r in rooms}
-    return {k: round(float(s[k]), 4) for k in ("AP", "AP50", "AP25", "AR")} | {"rooms": per_room}
+    scans = {m.scene_id: {k: round(float(summarize([m])[k]), 4) for k in ("AP", "AP50", "AP25")} for m in matches}
+    return {k: round(float(s[k]), 4) for k in ("AP", "AP50", "AP25", "AR")} | {"rooms": per_room, "scans": scans}
 
 
 def main() -> None:

@@ -1,0 +1,70 @@
+"""Paired, per-scan comparison of two recipes on the same real scans (``bench/evaluation/compare.py``).
+
+    python scripts/compare_probes.py A B [--metric AP50] [--json OUT.json]
+
+A and B are each either a probe folder (``assist3d probe --out DIR``: the network's instances alone,
+per-scan figures of every finished seed, averaged over seeds) or ``FILE.json:ROW``, the output of
+``scripts/hybrid_eval.py`` with one of its rows (``hybrid``, ``learned``, ...), averaged over every
+model in the file. Prints the mean per-scan figures of both sides, the mean difference B - A with a
+95 % interval that resamples rooms, the scans each side wins and the difference per room.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from assist3d.bench.evaluation.compare import mean_over_runs, paired_comparison
+from assist3d.core.fileio import write_json_atomic
+
+
+def per_scan(source: str, metric: str) -> tuple[dict[str, float], int]:
+    """Per-scan ``metric`` of a probe folder or ``FILE.json:ROW``, averaged over seeds or models."""
+    path = Path(source)
+    if path.is_dir():
+        results = sorted(path.glob("seed_*/result.json"))
+        if not results:
+            raise SystemExit(f"{path}: no seed_*/result.json (an unfinished probe?)")
+        runs = [{s: v[metric] for s, v in json.loads(p.read_text())["per_scene"].items()} for p in results]
+        return mean_over_runs(runs), len(runs)
+    file, _, row = source.rpartition(":")
+    if not file or not Path(file).is_file():
+        raise SystemExit(f"{source}: neither a probe folder nor FILE.json:ROW")
+    models = json.loads(Path(file).read_text())["models"]
+    runs = []
+    for name, rows in models.items():
+        if row not in rows:
+            raise SystemExit(f"{file}: model {name} has no row {row!r} (rows: {', '.join(rows)})")
+        scans: dict[str, float] = {}
+        for group in rows[row]:
+            if "scans" not in group:
+                raise SystemExit(f"{file}: no per-scan figures (written by an older scripts/hybrid_eval.py)")
+            scans |= {s: v[metric] for s, v in group["scans"].items()}
+        runs.append(scans)
+    return mean_over_runs(runs), len(runs)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("a")
+    ap.add_argument("b")
+    ap.add_argument("--metric", default="AP50", choices=("AP", "AP50", "AP25"))
+    ap.add_argument("--json", type=Path)
+    args = ap.parse_args()
+    (a, na), (b, nb) = per_scan(args.a, args.metric), per_scan(args.b, args.metric)
+    try:
+        c = paired_comparison(a, b, metric=args.metric)
+    except ValueError as e:
+        raise SystemExit(f"{args.a} vs {args.b}: {e}") from None
+    print(f"{args.metric} per scan, mean over {c.scans} scans ({c.rooms} rooms): A {c.mean_a:.3f} ({na} runs), "
+          f"B {c.mean_b:.3f} ({nb} runs)")
+    print(f"B - A: {c.mean_diff:+.3f}, 95 % interval over rooms [{c.ci95[0]:+.3f}, {c.ci95[1]:+.3f}]; "
+          f"B higher on {c.higher}, lower on {c.lower}, equal on {c.equal} scans")
+    print("per room: " + ", ".join(f"{r} {d:+.3f}" for r, d in c.per_room.items()))
+    if args.json:
+        write_json_atomic(args.json, {"a": args.a, "b": args.b, "runs_a": na, "runs_b": nb} | c.to_json())
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,36 @@
+"""Paired per-scan comparison of two recipes (bench/evaluation/compare.py)."""
+
+from __future__ import annotations
+
+import pytest
+
+from assist3d.bench.evaluation.compare import mean_over_runs, paired_comparison
+
+
+def test_paired_comparison_counts_wins_and_resamples_rooms_not_scans():
+    a = {"scene0001_00": 0.2, "scene0001_01": 0.2, "scene0001_02": 0.2, "scene0002_00": 0.5}
+    # B gains 0.3 on the three rescans of one room and loses 0.1 on the other room
+    b = {"scene0001_00": 0.5, "scene0001_01": 0.5, "scene0001_02": 0.5, "scene0002_00": 0.4}
+    c = paired_comparison(a, b, draws=500)
+    assert (c.scans, c.rooms, c.higher, c.lower, c.equal) == (4, 2, 3, 1, 0)
+    assert c.mean_diff == pytest.approx((0.9 - 0.1) / 4)
+    assert c.per_room == pytest.approx({"scene0001": 0.3, "scene0002": -0.1})
+    # two rooms: a draw holds room 1 twice (+0.3), room 2 twice (-0.1) or both (+0.2); the interval
+    # spans the room-level outcomes, which scan resampling (three of four scans agree) would narrow
+    assert c.ci95[0] == pytest.approx(-0.1) and c.ci95[1] == pytest.approx(0.3)
+    assert paired_comparison(a, b, draws=500).ci95 == c.ci95  # seeded
+
+
+def test_paired_comparison_refuses_different_scans_and_non_finite_figures():
+    with pytest.raises(ValueError, match="different scans: scene0002_00"):
+        paired_comparison({"scene0001_00": 0.1}, {"scene0001_00": 0.2, "scene0002_00": 0.3})
+    with pytest.raises(ValueError, match="not finite"):
+        paired_comparison({"scene0001_00": float("nan")}, {"scene0001_00": 0.2})
+    with pytest.raises(ValueError, match="no scans"):
+        paired_comparison({}, {})
+
+
+def test_mean_over_runs_averages_each_scan_and_checks_the_scans_match():
+    assert mean_over_runs([{"x": 0.1, "y": 0.4}, {"x": 0.3, "y": 0.0}]) == pytest.approx({"x": 0.2, "y": 0.2})
+    with pytest.raises(ValueError, match="different scans"):
+        mean_over_runs([{"x": 0.1}, {"y": 0.2}])
