@@ -36,7 +36,7 @@ from assist3d.core.fileio import write_json_atomic
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.features import voxel_features, voxelize
 from assist3d.learn.segmenter.geometric import segment_geometric, structural_points
-from assist3d.learn.segmenter.hybrid import HybridConfig, combine, structure_voxels
+from assist3d.learn.segmenter.hybrid import HybridConfig, combine, structure_voxels, without_structure
 from assist3d.learn.segmenter.infer import instances, predict_voxels, predict_voxels_tta
 from assist3d.learn.segmenter.superpoints import snap_masks, superpoints
 
@@ -105,7 +105,7 @@ def main() -> None:
             inst = instances(vox, fg, off, cfg.cluster)
             learned.append((inst.masks, inst.scores))
             structure = structure_voxels(vox, on_plane)
-            drop = instances(vox, np.where(structure, 0.0, fg), off, cfg.cluster)
+            drop = instances(vox, without_structure(fg, structure), off, cfg.cluster)
             learned_nostruct.append((drop.masks, drop.scores))
             for name, variant in VARIANTS.items():
                 h = combine(inst, vox, fg, off, cfg.cluster, geo.masks, segs, hybrid=variant, structure=structure)

@@ -78,6 +78,12 @@ def structure_voxels(vox: Voxels, on_plane: np.ndarray) -> np.ndarray:
     return on > 0.5 * np.bincount(vox.inverse, minlength=n)
 
 
+def without_structure(fg: np.ndarray, structure: np.ndarray) -> np.ndarray:
+    """The foreground probability ``fg`` (V,) with the ``structure`` voxels (V,) bool set to 0, so that
+    no instance is linked through them (``HybridConfig.drop_structure``)."""
+    return np.where(structure, 0.0, fg).astype(fg.dtype)
+
+
 def labels_from_masks(masks: np.ndarray) -> np.ndarray:
     """(N,) int64: the first (best-scoring) mask holding each point, -1 for none; masks sorted by score."""
     labels = np.full(masks.shape[1], -1, np.int64)
@@ -135,7 +141,7 @@ def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, offset: np.ndarr
         if structure is None or np.shape(structure) != (len(vox),):
             raise ValueError(f"drop_structure needs structure of shape ({len(vox)},), got "
                              f"{None if structure is None else np.shape(structure)}")
-        link_fg = np.where(structure, 0.0, fg).astype(fg.dtype)
+        link_fg = without_structure(fg, structure)
         learned = instances(vox, link_fg, offset, cluster)
     masks, scores = proposals(learned, vox, fg, components)
     if hybrid.stability_radii:
