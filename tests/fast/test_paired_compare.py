@@ -34,3 +34,26 @@ def test_mean_over_runs_averages_each_scan_and_checks_the_scans_match():
     assert mean_over_runs([{"x": 0.1, "y": 0.4}, {"x": 0.3, "y": 0.0}]) == pytest.approx({"x": 0.2, "y": 0.2})
     with pytest.raises(ValueError, match="different scans"):
         mean_over_runs([{"x": 0.1}, {"y": 0.2}])
+
+
+def test_compare_probes_reads_probe_folders_and_hybrid_eval_rows(load_script, tmp_path):
+    import json
+
+    cp = load_script("compare_probes")
+    probe = tmp_path / "probe"
+    for seed, v in ((0, 0.1), (1, 0.3)):
+        (probe / f"seed_{seed}").mkdir(parents=True)
+        (probe / f"seed_{seed}" / "result.json").write_text(json.dumps(
+            {"per_scene": {"scene0001_00": {"AP50": v}, "scene0002_00": {"AP50": 2 * v}}}))
+    (probe / "seed_2").mkdir()  # unfinished seed: no result.json, not counted
+    assert cp.per_scan(str(probe), "AP50") == (pytest.approx({"scene0001_00": 0.2, "scene0002_00": 0.4}), 2)
+    row = [{"scans": {"scene0001_00": {"AP50": 0.5}}}, {"scans": {"scene0451_01": {"AP50": 0.1}}}]
+    hybrid = tmp_path / "h.json"
+    hybrid.write_text(json.dumps({"models": {"a.pt": {"hybrid": row}, "b.pt": {"hybrid": row}}}))
+    assert cp.per_scan(f"{hybrid}:hybrid", "AP50") == (pytest.approx({"scene0001_00": 0.5, "scene0451_01": 0.1}), 2)
+    with pytest.raises(SystemExit, match="no row 'learned'"):
+        cp.per_scan(f"{hybrid}:learned", "AP50")
+    with pytest.raises(SystemExit, match="no seed_"):
+        cp.per_scan(str(probe / "seed_2"), "AP50")  # a folder without finished seeds
+    with pytest.raises(SystemExit, match="neither a probe folder nor FILE.json:ROW"):
+        cp.per_scan(str(tmp_path / "missing.json:hybrid"), "AP50")
