@@ -32,6 +32,7 @@ import torch
 
 from assist3d.bench.data import open_dataset
 from assist3d.bench.evaluation.ap import match_scene, summarize
+from assist3d.bench.evaluation.compare import room_of
 from assist3d.core.fileio import write_json_atomic
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.features import voxel_features, voxelize
@@ -40,7 +41,6 @@ from assist3d.learn.segmenter.hybrid import HybridConfig, combine, structure_vox
 from assist3d.learn.segmenter.infer import instances, predict_voxels, predict_voxels_tta
 from assist3d.learn.segmenter.superpoints import snap_masks, superpoints
 
-ROOM_CHARS = 9  # rescans of a room share the first 9 characters of their name
 STABILITY_RADII = (0.05, 0.10)  # the multi-scale radii of docs/fidelity.md's "Inference variants" around 7 cm
 VARIANTS = {
     "hybrid": HybridConfig(),
@@ -52,10 +52,11 @@ VARIANTS = {
 
 def _metrics(matches: list) -> dict:
     s = summarize(matches)
-    rooms = sorted({m.scene_id[:ROOM_CHARS] for m in matches})
-    per_room = {r: round(float(np.mean([summarize([m])["AP50"] for m in matches if m.scene_id.startswith(r)])), 4)
+    per_scan = {m.scene_id: summarize([m]) for m in matches}
+    rooms = sorted({room_of(sid) for sid in per_scan})
+    per_room = {r: round(float(np.mean([v["AP50"] for sid, v in per_scan.items() if room_of(sid) == r])), 4)
                 for r in rooms}
-    scans = {m.scene_id: {k: round(float(summarize([m])[k]), 4) for k in ("AP", "AP50", "AP25")} for m in matches}
+    scans = {sid: {k: round(float(v[k]), 4) for k in ("AP", "AP50", "AP25")} for sid, v in per_scan.items()}
     return {k: round(float(s[k]), 4) for k in ("AP", "AP50", "AP25", "AR")} | {"rooms": per_room, "scans": scans}
 
 

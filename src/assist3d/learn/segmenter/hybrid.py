@@ -169,6 +169,7 @@ def segment_hybrid(model: Network, cfg: SegmenterConfig, coord: np.ndarray, colo
     vox = voxelize(coord, cfg.net.voxel_size, color)
     fg, offset = predict_scan(model, cfg, coord, color, vox, tta=tta, device=device)
     on_plane = structural_points(coord, geometric)
+    structure = structure_voxels(vox, on_plane) if hybrid.drop_structure else None
     return combine(instances(vox, fg, offset, cfg.cluster), vox, fg, offset, cfg.cluster,
                    segment_geometric(coord, geometric, on_plane).masks, superpoints(coord, superpoint),
-                   superpoint.min_cover, hybrid, structure_voxels(vox, on_plane))
+                   superpoint.min_cover, hybrid, structure)
