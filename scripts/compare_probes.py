@@ -3,7 +3,8 @@
     python scripts/compare_probes.py A B [--metric AP50] [--json OUT.json]
 
 A and B are each either a probe folder (``assist3d probe --out DIR``: the network's instances alone,
-per-scan figures of every finished seed, averaged over seeds) or ``FILE.json:ROW``, the output of
+per-scan figures of every finished seed, averaged over seeds; ``DIR:hybrid`` for the figures of
+hybrid inference of a probe run with ``--hybrid``) or ``FILE.json:ROW``, the output of
 ``scripts/hybrid_eval.py`` with one of its rows (``hybrid``, ``learned``, ...), averaged over every
 model in the file. Prints the mean per-scan figures of both sides, the mean difference B - A with a
 95 % interval that resamples rooms, the scans each side wins and the difference per room.
@@ -22,13 +23,21 @@ from assist3d.core.fileio import write_json_atomic
 def per_scan(source: str, metric: str) -> tuple[dict[str, float], int]:
     """Per-scan ``metric`` of a probe folder or ``FILE.json:ROW``, averaged over seeds or models."""
     path = Path(source)
-    if path.is_dir():
-        results = sorted(path.glob("seed_*/result.json"))
-        if not results:
-            raise SystemExit(f"{path}: no seed_*/result.json (an unfinished probe?)")
-        runs = [{s: v[metric] for s, v in json.loads(p.read_text())["per_scene"].items()} for p in results]
-        return mean_over_runs(runs), len(runs)
     file, _, row = source.rpartition(":")
+    if path.is_dir() or (file and Path(file).is_dir() and row in ("learned", "hybrid")):
+        folder = path if path.is_dir() else Path(file)
+        results = sorted(folder.glob("seed_*/result.json"))
+        if not results:
+            raise SystemExit(f"{folder}: no seed_*/result.json (an unfinished probe?)")
+        runs = []
+        for p in results:
+            res = json.loads(p.read_text())
+            if not path.is_dir() and row == "hybrid":
+                if "hybrid" not in res:
+                    raise SystemExit(f"{p}: no hybrid figures (run the probe again with --hybrid)")
+                res = res["hybrid"]
+            runs.append({s: v[metric] for s, v in res["per_scene"].items()})
+        return mean_over_runs(runs), len(runs)
     if not file or not Path(file).is_file():
         raise SystemExit(f"{source}: neither a probe folder nor FILE.json:ROW")
     models = json.loads(Path(file).read_text())["models"]

@@ -14,7 +14,9 @@
 # (example-building processes, default 0: on a 2-core machine a worker beside 2 torch threads slowed
 # training ~2x; the batches are the same for any number),
 # PROBE_CONFIG (segmenter config for every probe; default configs/segmenter-pre-ema.yaml, the recipe
-# of the published tables; "" for today's defaults), SKIP_REAL=1 to leave out the leave-one-room-out rows; TSDF=1 adds "assist3d-tsdf": the ASSIST-3D
+# of the published tables; "" for today's defaults), HYBRID=1 to score every generated-data model with
+# hybrid inference too (`probe --hybrid`: a second row per generator in the table),
+# SKIP_REAL=1 to leave out the leave-one-room-out rows; TSDF=1 adds "assist3d-tsdf": the ASSIST-3D
 # preset with render.point_source=tsdf (ScanNet-like reconstructed surfaces; needs the [sim] extra),
 # the same scenes as "assist3d" (same seed and layouts), only the points differ.
 set -euo pipefail
@@ -31,6 +33,8 @@ LOADER_WORKERS=${LOADER_WORKERS:-0}
 PROBE_CONFIG=${PROBE_CONFIG-$HERE/configs/segmenter-pre-ema.yaml}
 CONFIG_ARGS=()
 if [[ -n "$PROBE_CONFIG" ]]; then CONFIG_ARGS=(--config "$PROBE_CONFIG"); fi
+HYBRID_ARGS=()
+if [[ "${HYBRID:-0}" == 1 ]]; then HYBRID_ARGS=(--hybrid); fi
 if [[ -z "${ASSIST3D:-}" ]]; then
   if command -v assist3d >/dev/null 2>&1; then ASSIST3D=assist3d; else ASSIST3D="$HERE/.venv/bin/assist3d"; fi
 fi
@@ -56,7 +60,7 @@ fi
 for k in $(seq 1 "$SEEDS"); do
   for g in $PROBED; do
     "$ASSIST3D" probe --train "assist3d:$OUT/data/$g" --eval "array:$DEV" --steps "$STEPS" --seeds "$k" \
-      --threads "$THREADS" --loader-workers "$LOADER_WORKERS" "${CONFIG_ARGS[@]}" --out "$OUT/probe/$g" --json > "$OUT/probe/$g.json"
+      --threads "$THREADS" --loader-workers "$LOADER_WORKERS" "${CONFIG_ARGS[@]}" "${HYBRID_ARGS[@]}" --out "$OUT/probe/$g" --json > "$OUT/probe/$g.json"
     echo "probe $g: $k seed(s) done" >&2
   done
 done

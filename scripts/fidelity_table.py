@@ -1,5 +1,7 @@
 """Markdown table of a scripts/fidelity.sh run: one row per training source, mean ± std over seeds,
-per-room AP50, plus the geometric reference and the pooled leave-one-room-out real-only model.
+per-room AP50, plus the geometric reference and the pooled leave-one-room-out real-only model. A
+probe run with ``--hybrid`` (fidelity.sh with HYBRID=1) adds a row "SOURCE, hybrid inference" after
+its own: the same models with the default inference of ``assist3d segment``.
 
     python scripts/fidelity_table.py OUT_DIR DEV_DIR [--json]
 """
@@ -14,20 +16,17 @@ from pathlib import Path
 import numpy as np
 
 from assist3d.bench.data import open_dataset
+from assist3d.bench.evaluation.compare import room_of
 from assist3d.bench.evaluation.runner import evaluate_dataset
 
 KEYS = ("AP", "AP50", "AP25", "AR")
-
-
-def room(scene_id: str) -> str:
-    return scene_id[:9]
 
 
 def per_room_ap50(per_scene: dict[str, dict]) -> dict[str, float]:
     rooms: dict[str, list[float]] = {}
     for sid, m in per_scene.items():
         if m.get("AP50") is not None:
-            rooms.setdefault(room(sid), []).append(m["AP50"])
+            rooms.setdefault(room_of(sid), []).append(m["AP50"])
     return {r: float(np.mean(v)) for r, v in sorted(rooms.items())}
 
 
@@ -71,8 +70,10 @@ def main() -> None:
     out, dev = Path(sys.argv[1]), Path(sys.argv[2])
     rows = []
     for summary in sorted((out / "probe").glob("*/summary.json")):
-        runs = json.loads(summary.read_text())["runs"]
-        rows.append(row_from_runs(summary.parent.name, runs))
+        data = json.loads(summary.read_text())
+        rows.append(row_from_runs(summary.parent.name, data["runs"]))
+        if "hybrid" in data:
+            rows.append(row_from_runs(f"{summary.parent.name}, hybrid inference", data["hybrid"]["runs"]))
     loro = loro_rows(out, dev)
     if loro:
         rows.append(loro)

@@ -44,9 +44,15 @@ def test_compare_probes_reads_probe_folders_and_hybrid_eval_rows(load_script, tm
     for seed, v in ((0, 0.1), (1, 0.3)):
         (probe / f"seed_{seed}").mkdir(parents=True)
         (probe / f"seed_{seed}" / "result.json").write_text(json.dumps(
-            {"per_scene": {"scene0001_00": {"AP50": v}, "scene0002_00": {"AP50": 2 * v}}}))
+            {"per_scene": {"scene0001_00": {"AP50": v}, "scene0002_00": {"AP50": 2 * v}},
+             "hybrid": {"per_scene": {"scene0001_00": {"AP50": v + 0.5}, "scene0002_00": {"AP50": v}}}}))
     (probe / "seed_2").mkdir()  # unfinished seed: no result.json, not counted
     assert cp.per_scan(str(probe), "AP50") == (pytest.approx({"scene0001_00": 0.2, "scene0002_00": 0.4}), 2)
+    assert cp.per_scan(f"{probe}:learned", "AP50") == cp.per_scan(str(probe), "AP50")
+    assert cp.per_scan(f"{probe}:hybrid", "AP50") == (pytest.approx({"scene0001_00": 0.7, "scene0002_00": 0.2}), 2)
+    (probe / "seed_0" / "result.json").write_text(json.dumps({"per_scene": {"scene0001_00": {"AP50": 0.1}}}))
+    with pytest.raises(SystemExit, match="run the probe again with --hybrid"):
+        cp.per_scan(f"{probe}:hybrid", "AP50")
     row = [{"scans": {"scene0001_00": {"AP50": 0.5}}}, {"scans": {"scene0451_01": {"AP50": 0.1}}}]
     hybrid = tmp_path / "h.json"
     hybrid.write_text(json.dumps({"models": {"a.pt": {"hybrid": row}, "b.pt": {"hybrid": row}}}))

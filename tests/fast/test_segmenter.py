@@ -424,6 +424,43 @@ def test_probe_runs_end_to_end_writes_the_json_contract_and_resumes(tiny_data, t
     assert r3.exit_code != 0 and "other settings" in str(r3.exception or r3.output)
 
 
+def test_probe_hybrid_scores_segment_default_and_is_added_to_a_finished_folder(tiny_data, tmp_path):
+    from assist3d.learn.segmenter.hybrid import segment_hybrid
+
+    out = tmp_path / "probe"
+    cfg = tmp_path / "seg.yaml"
+    cfg.write_text(json.dumps(TINY_NET))
+    args = ["probe", "--train", f"assist3d:{tiny_data}", "--eval", f"assist3d:{tiny_data}", "--steps", "2",
+            "--seeds", "1", "--out", str(out), "--config", str(cfg), "--json"]
+    r = runner.invoke(app, args)
+    assert r.exit_code == 0, r.output
+    plain = json.loads(r.stdout[r.stdout.index("{"):])
+    assert "hybrid" not in plain
+    stamp = (out / "seed_0" / "model.pt").stat().st_mtime_ns
+    # --hybrid on the finished folder: no retraining, the learned figures unchanged, hybrid ones added
+    r = runner.invoke(app, args + ["--hybrid"])
+    assert r.exit_code == 0, r.output
+    data = json.loads(r.stdout[r.stdout.index("{"):])
+    assert (out / "seed_0" / "model.pt").stat().st_mtime_ns == stamp
+    assert {k: v for k, v in data["runs"][0].items() if k != "hybrid"} == plain["runs"][0]
+    assert data["mean"] == plain["mean"]
+    h = data["hybrid"]
+    assert [run["seed"] for run in h["runs"]] == [0] and h["runs"][0] == data["runs"][0]["hybrid"]
+    assert {"AP", "AP50", "AP25", "AR", "train_seconds", "steps"} <= set(h["mean"]) and h["std"]["AP50"] == 0.0
+    assert json.loads((out / "seed_0" / "result.json").read_text())["hybrid"] == h["runs"][0]
+    # the hybrid predictions are those of `assist3d segment`'s default, and are scored as such
+    loaded = load_segmenter(out / "seed_0" / "model.pt")
+    ds = open_dataset(f"assist3d:{tiny_data}")
+    matches = []
+    for sid in ds.scene_ids:
+        sample = ds.load(sid)
+        seg = segment_hybrid(loaded.model, loaded.config, sample.coord, sample.color)
+        with np.load(out / "seed_0" / "pred_hybrid" / f"{sid}.npz") as z:
+            assert np.array_equal(z["masks"], seg.masks) and np.allclose(z["scores"], seg.scores)
+        matches.append(match_scene(sample.instance, seg.masks, seg.scores, valid=sample.valid, scene_id=sid))
+    assert h["runs"][0]["AP25"] == pytest.approx(summarize(matches)["AP25"], abs=1e-6)
+
+
 def _room_with_boxes() -> object:
     return make_toy_scene("toy", rng=np.random.default_rng(4), num_objects=4, room_m=4.0, density_per_m2=3000)
 

@@ -55,8 +55,12 @@ def probe_cmd(
     loader_workers: int = typer.Option(0, "--loader-workers", min=0, max=64,
                                        help="processes that build training examples ahead of each step "
                                             "(same batches for any number; 1 helps on 2 cores, more on a GPU machine)"),
+    hybrid: bool = typer.Option(False, "--hybrid", help="also score hybrid inference (the default of `assist3d "
+                                "segment`) with every seed's model: JSON key 'hybrid' (runs, mean, std); adds "
+                                "it to a finished folder without retraining"),
 ) -> None:
-    """Train the CPU segmenter on TRAIN for a fixed budget, segment EVAL zero-shot, print AP/AP50/AP25/AR."""
+    """Train the CPU segmenter on TRAIN for a fixed budget, segment EVAL zero-shot, print AP/AP50/AP25/AR
+    of the network's instances (and with --hybrid of hybrid inference too)."""
     _require_torch()
     import torch
 
@@ -99,28 +103,38 @@ def probe_cmd(
                 bar.update(task, completed=done, info=f"step {info['step']} loss {info['loss']:.3f} "
                                                       f"({info['train_seconds'] / 60:.1f} min)")
             elif kind == "eval":
-                bar.update(task, description=f"eval seed {info['seed']}", total=info["total"], completed=info["done"], info="")
+                bar.update(task, description=f"eval seed {info['seed']}" + (f" ({info['method']})" if "method" in info
+                                                                             else ""),
+                           total=info["total"], completed=info["done"], info="")
             elif kind == "seed_done":
+                h = info.get("hybrid") if hybrid else None
                 console.print(f"seed {info['seed']}: AP {_fmt(info['AP'])}  AP50 {_fmt(info['AP50'])}  "
-                              f"AP25 {_fmt(info['AP25'])}  AR {_fmt(info['AR'])}  ({info['steps']} steps, "
+                              f"AP25 {_fmt(info['AP25'])}  AR {_fmt(info['AR'])}"
+                              + (f"  hybrid AP50 {_fmt(h['AP50'])}" if h else "")
+                              + f"  ({info['steps']} steps, "
                               f"{info['train_seconds'] / 60:.1f} min{', cached' if info.get('cached') else ''})")
 
         summary = run_probe(req, out, device=resolve_device(device), loader_workers=loader_workers,
-                            on_event=on_event)
+                            hybrid=hybrid, on_event=on_event)
     if as_json:
-        typer.echo(json.dumps({k: summary[k] for k in ("runs", "mean", "std")}, indent=1))
+        typer.echo(json.dumps({k: summary[k] for k in ("runs", "mean", "std", "hybrid") if k in summary}, indent=1))
         return
     table = Table(title=f"probe: {', '.join(train)} -> {', '.join(eval_)}")
     for col in ("seed", "AP", "AP50 [95% CI]", "AP25", "AR", "steps", "minutes"):
         table.add_column(col, justify="right")
-    for r in summary["runs"]:
-        ci = r.get("ci95", {}).get("AP50")
-        ci_s = f" [{ci[0]:.3f}, {ci[1]:.3f}]" if ci else ""
-        table.add_row(str(r["seed"]), _fmt(r["AP"]), _fmt(r["AP50"]) + ci_s, _fmt(r["AP25"]), _fmt(r["AR"]),
-                      str(r["steps"]), f"{r['train_seconds'] / 60:.1f}")
-    m, s = summary["mean"], summary["std"]
-    table.add_row("mean ± std", *(f"{_fmt(m[k])} ± {_fmt(s[k])}" for k in ("AP", "AP50", "AP25", "AR")),
-                  f"{m['steps']:.0f}" if m["steps"] is not None else "-", "")
+    for label, part in (("", summary), (" hybrid", summary.get("hybrid"))):
+        if part is None:
+            continue
+        if label:
+            table.add_section()
+        for r in part["runs"]:
+            ci = r.get("ci95", {}).get("AP50")
+            ci_s = f" [{ci[0]:.3f}, {ci[1]:.3f}]" if ci else ""
+            table.add_row(f"{r['seed']}{label}", _fmt(r["AP"]), _fmt(r["AP50"]) + ci_s, _fmt(r["AP25"]), _fmt(r["AR"]),
+                          str(r["steps"]), f"{r['train_seconds'] / 60:.1f}")
+        m, s = part["mean"], part["std"]
+        table.add_row(f"mean ± std{label}", *(f"{_fmt(m[k])} ± {_fmt(s[k])}" for k in ("AP", "AP50", "AP25", "AR")),
+                      f"{m['steps']:.0f}" if m["steps"] is not None else "-", "")
     Console().print(table)
 
 

@@ -21,8 +21,8 @@ The two proposal sources fail in different rooms (docs/fidelity.md: the network 
 whose objects stand apart, the components in cluttered ones), and snapping fixes ragged 5 cm
 boundaries. Measured with 28 trained models on the dev scans and on scene0451_01 (docs/fidelity.md,
 "Hybrid inference" and "Fallback proposals (adopted) and a stability ranking"). ``assist3d probe``
-keeps the learned proposals alone: it measures training data, and the geometric proposals do not
-depend on it.
+scores the learned proposals alone (it measures training data, and the geometric proposals do not
+depend on it); ``probe --hybrid`` scores this recipe too.
 
 ``HybridConfig.stability_radii`` (off by default: measured, not adopted) multiplies the scores of
 steps 1-2 by ``0.5 + 0.5 x stability``, the mean over those radii of each proposal's best IoU with

@@ -9,7 +9,15 @@ Output folder (resumable; a finished seed is never redone, an unfinished one res
     DIR/seed_K/model.pt       the trained model (weights only)
     DIR/seed_K/pred/ID.npz    predictions per evaluation scene (masks, scores)
     DIR/seed_K/result.json    metrics of the seed (written last: the seed's completion marker)
-    DIR/summary.json          runs, mean and std over seeds (the --json output)
+    DIR/seed_K/pred_hybrid/   with ``hybrid=True``: predictions of hybrid inference, whose metrics are
+                              added to result.json under ``hybrid``
+    DIR/summary.json          runs, mean and std over seeds (the --json output; ``hybrid`` too)
+
+The figures of ``runs``/``mean``/``std`` score the network's instances alone: the probe measures
+training data, and the geometric proposals of hybrid inference do not depend on it. ``hybrid=True``
+also scores what ``assist3d segment`` does by default (``hybrid.py``) with every seed's model, under
+the key ``hybrid`` (its own ``runs``/``mean``/``std``); it is an evaluation option, not part of the
+request, so it can be added to a finished folder without retraining.
 
 Metrics are pooled over all evaluation scenes like the benchmark; the bootstrap interval resamples
 scenes with replacement (1,000 draws, 2.5th to 97.5th percentile).
@@ -35,6 +43,7 @@ from .checkpoint import load_segmenter, save_segmenter
 from .config import SegmenterConfig, legacy_config
 from .data import Scene
 from .geometric import segment_geometric
+from .hybrid import segment_hybrid
 from .infer import segment_points
 from .train import Budget, train_segmenter
 
@@ -42,6 +51,7 @@ log = logging.getLogger(__name__)
 
 RUN_KEYS: tuple[str, ...] = ("AP", "AP50", "AP25", "AR")
 BOOTSTRAP_DRAWS = 1000
+METHODS: tuple[str, ...] = ("learned", "hybrid", "geometric")
 
 
 @dataclass(frozen=True)
@@ -99,8 +109,12 @@ def _num(x: float) -> float | None:
 
 def evaluate_model(model_path: Path, eval_specs: Sequence[str], pred_dir: Path, *, method: str = "learned",
                    on_scene: Callable[[int, int], None] | None = None) -> dict:
-    """Segment every scene of ``eval_specs``, write predictions, return metrics with per-scene figures."""
-    loaded = load_segmenter(model_path) if method == "learned" else None
+    """Segment every scene of ``eval_specs`` with ``method`` (``learned``: the network's instances,
+    ``hybrid``: :func:`hybrid.segment_hybrid`, ``geometric``: the non-learned reference, which ignores
+    ``model_path``), write predictions, return metrics with per-scene figures."""
+    if method not in METHODS:
+        raise ValueError(f"method {method!r}: expected one of {', '.join(METHODS)}")
+    loaded = load_segmenter(model_path) if method != "geometric" else None
     datasets = [open_dataset(s) for s in eval_specs]
     total = sum(len(d) for d in datasets)
     matches: list[SceneMatches] = []
@@ -111,8 +125,10 @@ def evaluate_model(model_path: Path, eval_specs: Sequence[str], pred_dir: Path, 
         for sid in ds.scene_ids:
             sample = ds.load(sid)
             t0 = time.perf_counter()
-            if loaded is not None:
+            if method == "learned":
                 seg = segment_points(loaded.model, loaded.config, sample.coord, sample.color)
+            elif method == "hybrid":
+                seg = segment_hybrid(loaded.model, loaded.config, sample.coord, sample.color)
             else:
                 seg = segment_geometric(sample.coord)
             seconds += time.perf_counter() - t0
@@ -153,6 +169,7 @@ def _check_request(out: Path, req: ProbeRequest) -> None:
 
 
 def summarise_runs(runs: list[dict]) -> dict:
+    """``runs`` with the ``mean`` and ``std`` (ddof 1; 0 for one run) of each metric over them."""
     out: dict = {"runs": runs, "mean": {}, "std": {}}
     for k in (*RUN_KEYS, "train_seconds", "steps"):
         vals = np.array([r[k] for r in runs if r.get(k) is not None], np.float64)
@@ -161,9 +178,17 @@ def summarise_runs(runs: list[dict]) -> dict:
     return out
 
 
+def _run_row(seed: int, metrics: dict, meta: dict) -> dict:
+    """One seed's figures as written to result.json (and to ``runs`` of the summary)."""
+    return {"seed": seed, **{k: metrics[k] for k in RUN_KEYS}, "AR50": metrics["AR50"], "AR25": metrics["AR25"],
+            "train_seconds": round(float(meta.get("train_seconds", 0.0)), 1), "steps": int(meta.get("step", 0)),
+            "ci95": metrics["ci95"], "per_scene": metrics["per_scene"], "predict_seconds": metrics["predict_seconds"]}
+
+
 def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", loader_workers: int = 0,
-              on_event: Callable[[str, dict], None] | None = None) -> dict:
-    """Train and evaluate ``req.seeds`` seeds into ``out_dir``; returns (and writes) the summary."""
+              hybrid: bool = False, on_event: Callable[[str, dict], None] | None = None) -> dict:
+    """Train and evaluate ``req.seeds`` seeds into ``out_dir``; returns (and writes) the summary. With
+    ``hybrid``, every seed's model is also scored with hybrid inference (the summary's ``hybrid``)."""
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out {out}: exists and is not a folder")
@@ -176,7 +201,8 @@ def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", lo
         sdir = out / f"seed_{seed}"
         result_path = sdir / "result.json"
         if result_path.is_file():
-            runs.append(json.loads(result_path.read_text()))
+            run = json.loads(result_path.read_text())
+            runs.append(_with_hybrid(run, sdir, req, seed, emit) if hybrid else run)
             emit("seed_done", {"seed": seed, "cached": True, **runs[-1]})
             continue
         model_path = sdir / "model.pt"
@@ -197,13 +223,32 @@ def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", lo
         emit("eval_start", {"seed": seed})
         metrics = evaluate_model(model_path, req.eval, sdir / "pred",
                                  on_scene=lambda k, n: emit("eval", {"seed": seed, "done": k, "total": n}))
-        run = {"seed": seed, **{k: metrics[k] for k in RUN_KEYS}, "AR50": metrics["AR50"], "AR25": metrics["AR25"],
-               "train_seconds": round(float(meta.get("train_seconds", 0.0)), 1), "steps": int(meta.get("step", 0)),
-               "ci95": metrics["ci95"], "per_scene": metrics["per_scene"], "predict_seconds": metrics["predict_seconds"]}
+        run = _run_row(seed, metrics, meta)
+        if hybrid:
+            run = _with_hybrid(run, sdir, req, seed, emit, write=False)
         write_json_atomic(result_path, run)
         runs.append(run)
         emit("seed_done", {"seed": seed, "cached": False, **run})
     summary = summarise_runs(runs)
+    if hybrid:
+        summary["hybrid"] = summarise_runs([r["hybrid"] for r in runs])
     summary["request"] = req.as_dict()
     write_json_atomic(out / "summary.json", summary)
     return summary
+
+
+def _with_hybrid(run: dict, sdir: Path, req: ProbeRequest, seed: int, emit: Callable[[str, dict], None],
+                 write: bool = True) -> dict:
+    """``run`` (a seed's result.json) with its ``hybrid`` figures, computed from the seed's model.pt
+    when missing and then (``write``) saved back into result.json; the other figures are unchanged."""
+    if isinstance(run.get("hybrid"), dict):
+        return run
+    emit("eval_start", {"seed": seed, "method": "hybrid"})
+    model_path = sdir / "model.pt"
+    metrics = evaluate_model(model_path, req.eval, sdir / "pred_hybrid", method="hybrid",
+                             on_scene=lambda k, n: emit("eval", {"seed": seed, "done": k, "total": n,
+                                                                 "method": "hybrid"}))
+    run = {**run, "hybrid": _run_row(seed, metrics, load_segmenter(model_path).meta)}
+    if write:
+        write_json_atomic(sdir / "result.json", run)
+    return run
