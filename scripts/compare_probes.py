@@ -4,7 +4,8 @@
 
 A and B are each either a probe folder (``assist3d probe --out DIR``: the network's instances alone,
 per-scan figures of every finished seed, averaged over seeds; ``DIR:hybrid`` for the figures of
-hybrid inference of a probe run with ``--hybrid``) or ``FILE.json:ROW``, the output of
+hybrid inference of a probe run with ``--hybrid``, ``DIR:learned`` the same as ``DIR``; a folder
+whose own name ends in ``:hybrid`` is read as a folder) or ``FILE.json:ROW``, the output of
 ``scripts/hybrid_eval.py`` with one of its rows (``hybrid``, ``learned``, ...), averaged over every
 model in the file. Prints the mean per-scan figures of both sides, the mean difference B - A with a
 95 % interval that resamples rooms, the scans each side wins and the difference per room.
@@ -24,7 +25,9 @@ def per_scan(source: str, metric: str) -> tuple[dict[str, float], int]:
     """Per-scan ``metric`` of a probe folder or ``FILE.json:ROW``, averaged over seeds or models."""
     path = Path(source)
     file, _, row = source.rpartition(":")
-    if path.is_dir() or (file and Path(file).is_dir() and row in ("learned", "hybrid")):
+    if not path.is_dir() and file and Path(file).is_dir() and row not in ("learned", "hybrid"):
+        raise SystemExit(f"{source}: a probe folder has the rows 'learned' and 'hybrid', not {row!r}")
+    if path.is_dir() or (file and Path(file).is_dir()):
         folder = path if path.is_dir() else Path(file)
         results = sorted(folder.glob("seed_*/result.json"))
         if not results:

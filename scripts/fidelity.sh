@@ -44,14 +44,14 @@ mkdir -p "$OUT/data" "$OUT/probe"
 
 for g in $GENERATORS; do
   "$ASSIST3D" generate --out "$OUT/data/$g" --num-scenes "$SCENES" --seed 0 --preset "$g" --workers 2 \
-    "${ASSET_ARGS[@]}" --json > "$OUT/data/$g.generate.json"
+    ${ASSET_ARGS[@]+"${ASSET_ARGS[@]}"} --json > "$OUT/data/$g.generate.json"
 done
 
 PROBED="$GENERATORS"
 if [[ "${TSDF:-0}" == 1 ]]; then
   printf 'render:\n  point_source: tsdf\n' > "$OUT/data/tsdf.yaml"
   "$ASSIST3D" generate --out "$OUT/data/assist3d-tsdf" --num-scenes "$SCENES" --seed 0 --preset assist3d --workers 2 \
-    --config "$OUT/data/tsdf.yaml" "${ASSET_ARGS[@]}" --json > "$OUT/data/assist3d-tsdf.generate.json"
+    --config "$OUT/data/tsdf.yaml" ${ASSET_ARGS[@]+"${ASSET_ARGS[@]}"} --json > "$OUT/data/assist3d-tsdf.generate.json"
   PROBED="$PROBED assist3d-tsdf"
 fi
 
@@ -60,7 +60,7 @@ fi
 for k in $(seq 1 "$SEEDS"); do
   for g in $PROBED; do
     "$ASSIST3D" probe --train "assist3d:$OUT/data/$g" --eval "array:$DEV" --steps "$STEPS" --seeds "$k" \
-      --threads "$THREADS" --loader-workers "$LOADER_WORKERS" "${CONFIG_ARGS[@]}" "${HYBRID_ARGS[@]}" --out "$OUT/probe/$g" --json > "$OUT/probe/$g.json"
+      --threads "$THREADS" --loader-workers "$LOADER_WORKERS" ${CONFIG_ARGS[@]+"${CONFIG_ARGS[@]}"} ${HYBRID_ARGS[@]+"${HYBRID_ARGS[@]}"} --out "$OUT/probe/$g" --json > "$OUT/probe/$g.json"
     echo "probe $g: $k seed(s) done" >&2
   done
 done
@@ -78,7 +78,7 @@ if [[ "${SKIP_REAL:-0}" != 1 ]]; then
       if [[ "$(basename "$f" | cut -c1-9)" == "$r" ]]; then eval_args+=(--eval "array:$f"); else train_args+=(--train "array:$f"); fi
     done
     "$ASSIST3D" probe "${train_args[@]}" "${eval_args[@]}" --steps "$STEPS" --seeds "$SEEDS" --threads "$THREADS" \
-      --loader-workers "$LOADER_WORKERS" "${CONFIG_ARGS[@]}" --out "$OUT/probe/real-loro/$r" --json > "$OUT/probe/real-loro/$r.json"
+      --loader-workers "$LOADER_WORKERS" ${CONFIG_ARGS[@]+"${CONFIG_ARGS[@]}"} --out "$OUT/probe/real-loro/$r" --json > "$OUT/probe/real-loro/$r.json"
   done
 fi
 

@@ -50,6 +50,8 @@ def test_compare_probes_reads_probe_folders_and_hybrid_eval_rows(load_script, tm
     assert cp.per_scan(str(probe), "AP50") == (pytest.approx({"scene0001_00": 0.2, "scene0002_00": 0.4}), 2)
     assert cp.per_scan(f"{probe}:learned", "AP50") == cp.per_scan(str(probe), "AP50")
     assert cp.per_scan(f"{probe}:hybrid", "AP50") == (pytest.approx({"scene0001_00": 0.7, "scene0002_00": 0.2}), 2)
+    with pytest.raises(SystemExit, match="not 'geometric'"):
+        cp.per_scan(f"{probe}:geometric", "AP50")
     (probe / "seed_0" / "result.json").write_text(json.dumps({"per_scene": {"scene0001_00": {"AP50": 0.1}}}))
     with pytest.raises(SystemExit, match="run the probe again with --hybrid"):
         cp.per_scan(f"{probe}:hybrid", "AP50")

@@ -431,24 +431,29 @@ def test_probe_hybrid_scores_segment_default_and_is_added_to_a_finished_folder(t
     cfg = tmp_path / "seg.yaml"
     cfg.write_text(json.dumps(TINY_NET))
     args = ["probe", "--train", f"assist3d:{tiny_data}", "--eval", f"assist3d:{tiny_data}", "--steps", "2",
-            "--seeds", "1", "--out", str(out), "--config", str(cfg), "--json"]
-    r = runner.invoke(app, args)
-    assert r.exit_code == 0, r.output
-    plain = json.loads(r.stdout[r.stdout.index("{"):])
+            "--out", str(out), "--config", str(cfg)]
+
+    def probe(*extra: str) -> dict:
+        r = runner.invoke(app, args + list(extra), env={"COLUMNS": "200"})
+        assert r.exit_code == 0, r.output
+        return json.loads(r.stdout[r.stdout.index("{"):]) if "--json" in extra else r.stdout
+
+    plain = probe("--seeds", "1", "--json")
     assert "hybrid" not in plain
     stamp = (out / "seed_0" / "model.pt").stat().st_mtime_ns
-    # --hybrid on the finished folder: no retraining, the learned figures unchanged, hybrid ones added
-    r = runner.invoke(app, args + ["--hybrid"])
-    assert r.exit_code == 0, r.output
-    data = json.loads(r.stdout[r.stdout.index("{"):])
+    # --hybrid: seed 0 (finished) is scored without retraining, seed 1 is trained and scored
+    data = probe("--seeds", "2", "--json", "--hybrid")
     assert (out / "seed_0" / "model.pt").stat().st_mtime_ns == stamp
-    assert {k: v for k, v in data["runs"][0].items() if k != "hybrid"} == plain["runs"][0]
-    assert data["mean"] == plain["mean"]
+    assert data["runs"][0] == plain["runs"][0] and "hybrid" not in data["runs"][1]  # learned figures as they were
     h = data["hybrid"]
-    assert [run["seed"] for run in h["runs"]] == [0] and h["runs"][0] == data["runs"][0]["hybrid"]
-    assert {"AP", "AP50", "AP25", "AR", "train_seconds", "steps"} <= set(h["mean"]) and h["std"]["AP50"] == 0.0
-    assert json.loads((out / "seed_0" / "result.json").read_text())["hybrid"] == h["runs"][0]
-    # the hybrid predictions are those of `assist3d segment`'s default, and are scored as such
+    assert [run["seed"] for run in h["runs"]] == [0, 1] and h["runs"][1]["steps"] == 2
+    ap50 = [run["AP50"] for run in h["runs"]]
+    assert h["mean"]["AP50"] == pytest.approx(np.mean(ap50), abs=1e-6)
+    assert h["std"]["AP50"] == pytest.approx(np.std(ap50, ddof=1), abs=1e-6)
+    for seed in (0, 1):
+        assert json.loads((out / f"seed_{seed}" / "result.json").read_text())["hybrid"] == h["runs"][seed]
+    # the hybrid predictions are those of `assist3d segment`'s default, scored as such, and not the
+    # geometric reference's (whose scores are its own)
     loaded = load_segmenter(out / "seed_0" / "model.pt")
     ds = open_dataset(f"assist3d:{tiny_data}")
     matches = []
@@ -457,8 +462,28 @@ def test_probe_hybrid_scores_segment_default_and_is_added_to_a_finished_folder(t
         seg = segment_hybrid(loaded.model, loaded.config, sample.coord, sample.color)
         with np.load(out / "seed_0" / "pred_hybrid" / f"{sid}.npz") as z:
             assert np.array_equal(z["masks"], seg.masks) and np.allclose(z["scores"], seg.scores)
+            geo = segment_geometric(sample.coord)
+            assert len(z["scores"]) != len(geo.scores) or not np.allclose(z["scores"], geo.scores)
         matches.append(match_scene(sample.instance, seg.masks, seg.scores, valid=sample.valid, scene_id=sid))
     assert h["runs"][0]["AP25"] == pytest.approx(summarize(matches)["AP25"], abs=1e-6)
+    # a later run, with or without --hybrid, reuses the hybrid figures of today's settings
+    pred_stamp = (out / "seed_1" / "pred_hybrid" / f"{ds.scene_ids[0]}.npz").stat().st_mtime_ns
+    again = probe("--seeds", "2", "--json")
+    assert again["hybrid"] == h and again["runs"] == data["runs"]
+    table = probe("--seeds", "2", "--hybrid")
+    assert "mean ± std hybrid" in table and "1 hybrid" in table
+    assert (out / "seed_1" / "pred_hybrid" / f"{ds.scene_ids[0]}.npz").stat().st_mtime_ns == pred_stamp
+    # figures made with other inference settings are recomputed, not mixed with today's
+    res = json.loads((out / "seed_1" / "result.json").read_text())
+    res["hybrid"]["inference"]["hybrid"]["nms_iou"] = 0.3
+    res["hybrid"]["AP50"] = -1.0
+    (out / "seed_1" / "result.json").write_text(json.dumps(res))
+    assert "hybrid" not in probe("--seeds", "2", "--json")  # not summarised while stale
+    redone = probe("--seeds", "2", "--json", "--hybrid")["hybrid"]
+    assert (out / "seed_1" / "pred_hybrid" / f"{ds.scene_ids[0]}.npz").stat().st_mtime_ns != pred_stamp
+    assert redone["mean"] == h["mean"]  # the same figures again (only the timing may differ)
+    assert [{k: v for k, v in r.items() if k != "predict_seconds"} for r in redone["runs"]] == \
+        [{k: v for k, v in r.items() if k != "predict_seconds"} for r in h["runs"]]
 
 
 def _room_with_boxes() -> object:

@@ -17,7 +17,11 @@ The figures of ``runs``/``mean``/``std`` score the network's instances alone: th
 training data, and the geometric proposals of hybrid inference do not depend on it. ``hybrid=True``
 also scores what ``assist3d segment`` does by default (``hybrid.py``) with every seed's model, under
 the key ``hybrid`` (its own ``runs``/``mean``/``std``); it is an evaluation option, not part of the
-request, so it can be added to a finished folder without retraining.
+request, so it can be added to a finished folder without retraining. Each seed's hybrid figures
+record the inference settings that made them (``inference``: the hybrid, geometric and superpoint
+defaults of the code that ran); figures made with other settings are recomputed, never mixed. The
+summary holds ``hybrid`` whenever every seed has figures for today's settings, with or without
+``hybrid=True``.
 
 Metrics are pooled over all evaluation scenes like the benchmark; the bootstrap interval resamples
 scenes with replacement (1,000 draws, 2.5th to 97.5th percentile).
@@ -28,7 +32,7 @@ from __future__ import annotations
 import json
 import logging
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -42,9 +46,10 @@ from ...core.fileio import write_json_atomic
 from .checkpoint import load_segmenter, save_segmenter
 from .config import SegmenterConfig, legacy_config
 from .data import Scene
-from .geometric import segment_geometric
-from .hybrid import segment_hybrid
+from .geometric import GeometricConfig, segment_geometric
+from .hybrid import HybridConfig, segment_hybrid
 from .infer import segment_points
+from .superpoints import SuperpointConfig
 from .train import Budget, train_segmenter
 
 log = logging.getLogger(__name__)
@@ -52,6 +57,12 @@ log = logging.getLogger(__name__)
 RUN_KEYS: tuple[str, ...] = ("AP", "AP50", "AP25", "AR")
 BOOTSTRAP_DRAWS = 1000
 METHODS: tuple[str, ...] = ("learned", "hybrid", "geometric")
+
+
+def hybrid_settings() -> dict:
+    """The settings of hybrid inference as ``segment`` runs it today (stored with hybrid figures)."""
+    return json.loads(json.dumps({"hybrid": asdict(HybridConfig()), "geometric": asdict(GeometricConfig()),
+                                  "superpoint": asdict(SuperpointConfig())}))
 
 
 @dataclass(frozen=True)
@@ -224,31 +235,36 @@ def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", lo
         metrics = evaluate_model(model_path, req.eval, sdir / "pred",
                                  on_scene=lambda k, n: emit("eval", {"seed": seed, "done": k, "total": n}))
         run = _run_row(seed, metrics, meta)
+        write_json_atomic(result_path, run)  # the learned figures are kept even if hybrid scoring stops
         if hybrid:
-            run = _with_hybrid(run, sdir, req, seed, emit, write=False)
-        write_json_atomic(result_path, run)
+            run = _with_hybrid(run, sdir, req, seed, emit)
         runs.append(run)
         emit("seed_done", {"seed": seed, "cached": False, **run})
-    summary = summarise_runs(runs)
-    if hybrid:
+    summary = summarise_runs([{k: v for k, v in r.items() if k != "hybrid"} for r in runs])
+    settings = hybrid_settings()
+    if runs and all(isinstance(r.get("hybrid"), dict) and r["hybrid"].get("inference") == settings for r in runs):
         summary["hybrid"] = summarise_runs([r["hybrid"] for r in runs])
     summary["request"] = req.as_dict()
     write_json_atomic(out / "summary.json", summary)
     return summary
 
 
-def _with_hybrid(run: dict, sdir: Path, req: ProbeRequest, seed: int, emit: Callable[[str, dict], None],
-                 write: bool = True) -> dict:
+def _with_hybrid(run: dict, sdir: Path, req: ProbeRequest, seed: int, emit: Callable[[str, dict], None]) -> dict:
     """``run`` (a seed's result.json) with its ``hybrid`` figures, computed from the seed's model.pt
-    when missing and then (``write``) saved back into result.json; the other figures are unchanged."""
-    if isinstance(run.get("hybrid"), dict):
+    when missing or made with other inference settings, and then saved back into result.json; the
+    other figures are unchanged."""
+    settings = hybrid_settings()
+    if isinstance(run.get("hybrid"), dict) and run["hybrid"].get("inference") == settings:
         return run
-    emit("eval_start", {"seed": seed, "method": "hybrid"})
     model_path = sdir / "model.pt"
+    if not model_path.is_file():
+        raise DataError(f"{model_path}: not found, so seed {seed} cannot be scored with hybrid inference; "
+                        f"remove {sdir} to train the seed again")
+    emit("eval_start", {"seed": seed, "method": "hybrid"})
     metrics = evaluate_model(model_path, req.eval, sdir / "pred_hybrid", method="hybrid",
                              on_scene=lambda k, n: emit("eval", {"seed": seed, "done": k, "total": n,
                                                                  "method": "hybrid"}))
-    run = {**run, "hybrid": _run_row(seed, metrics, load_segmenter(model_path).meta)}
-    if write:
-        write_json_atomic(sdir / "result.json", run)
+    row = _run_row(seed, metrics, {"train_seconds": run["train_seconds"], "step": run["steps"]})
+    run = {**run, "hybrid": {**row, "inference": settings}}
+    write_json_atomic(sdir / "result.json", run)
     return run
