@@ -8,7 +8,9 @@ hybrid inference of a probe run with ``--hybrid``, ``DIR:learned`` the same as `
 whose own name ends in ``:hybrid`` is read as a folder) or ``FILE.json:ROW``, the output of
 ``scripts/hybrid_eval.py`` with one of its rows (``hybrid``, ``learned``, ...), averaged over every
 model in the file. Prints the mean per-scan figures of both sides, the mean difference B - A with a
-95 % interval that resamples rooms, the scans each side wins and the difference per room.
+95 % interval that resamples rooms (the models at hand), a second interval that also resamples each
+side's runs (the recipes: seeds differ by as much as recipes do), each run's mean over the scans,
+the scans each side wins and the difference per room.
 """
 
 from __future__ import annotations
@@ -17,12 +19,12 @@ import argparse
 import json
 from pathlib import Path
 
-from assist3d.bench.evaluation.compare import mean_over_runs, paired_comparison
+from assist3d.bench.evaluation.compare import mean_over_runs, recipe_comparison
 from assist3d.core.fileio import write_json_atomic
 
 
-def per_scan(source: str, metric: str) -> tuple[dict[str, float], int]:
-    """Per-scan ``metric`` of a probe folder or ``FILE.json:ROW``, averaged over seeds or models."""
+def per_run(source: str, metric: str) -> list[dict[str, float]]:
+    """Per-scan ``metric`` of each seed of a probe folder or each model of ``FILE.json:ROW``."""
     path = Path(source)
     file, _, row = source.rpartition(":")
     if not path.is_dir() and file and Path(file).is_dir() and row not in ("learned", "hybrid"):
@@ -40,7 +42,7 @@ def per_scan(source: str, metric: str) -> tuple[dict[str, float], int]:
                     raise SystemExit(f"{p}: no hybrid figures (run the probe again with --hybrid)")
                 res = res["hybrid"]
             runs.append({s: v[metric] for s, v in res["per_scene"].items()})
-        return mean_over_runs(runs), len(runs)
+        return runs
     if not file or not Path(file).is_file():
         raise SystemExit(f"{source}: neither a probe folder nor FILE.json:ROW")
     models = json.loads(Path(file).read_text())["models"]
@@ -54,6 +56,12 @@ def per_scan(source: str, metric: str) -> tuple[dict[str, float], int]:
                 raise SystemExit(f"{file}: no per-scan figures (written by an older scripts/hybrid_eval.py)")
             scans |= {s: v[metric] for s, v in group["scans"].items()}
         runs.append(scans)
+    return runs
+
+
+def per_scan(source: str, metric: str) -> tuple[dict[str, float], int]:
+    """Per-scan ``metric`` of a probe folder or ``FILE.json:ROW``, averaged over seeds or models."""
+    runs = per_run(source, metric)
     return mean_over_runs(runs), len(runs)
 
 
@@ -64,18 +72,22 @@ def main() -> None:
     ap.add_argument("--metric", default="AP50", choices=("AP", "AP50", "AP25"))
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
-    (a, na), (b, nb) = per_scan(args.a, args.metric), per_scan(args.b, args.metric)
+    ra, rb = per_run(args.a, args.metric), per_run(args.b, args.metric)
     try:
-        c = paired_comparison(a, b, metric=args.metric)
+        r = recipe_comparison(ra, rb, metric=args.metric)
     except ValueError as e:
         raise SystemExit(f"{args.a} vs {args.b}: {e}") from None
-    print(f"{args.metric} per scan, mean over {c.scans} scans ({c.rooms} rooms): A {c.mean_a:.3f} ({na} runs), "
-          f"B {c.mean_b:.3f} ({nb} runs)")
-    print(f"B - A: {c.mean_diff:+.3f}, 95 % interval over rooms [{c.ci95[0]:+.3f}, {c.ci95[1]:+.3f}]; "
-          f"B higher on {c.higher}, lower on {c.lower}, equal on {c.equal} scans")
-    print("per room: " + ", ".join(f"{r} {d:+.3f}" for r, d in c.per_room.items()))
+    c = r.paired
+    print(f"{args.metric} per scan, mean over {c.scans} scans ({c.rooms} rooms): A {c.mean_a:.3f} ({len(ra)} runs), "
+          f"B {c.mean_b:.3f} ({len(rb)} runs)")
+    print(f"B - A: {c.mean_diff:+.3f}, 95 % interval over rooms [{c.ci95[0]:+.3f}, {c.ci95[1]:+.3f}], over rooms "
+          f"and runs [{r.ci95[0]:+.3f}, {r.ci95[1]:+.3f}]; B higher on {c.higher}, lower on {c.lower}, equal on "
+          f"{c.equal} scans")
+    print("each run's mean over the scans: A " + ", ".join(f"{x:.3f}" for x in r.runs_a)
+          + "; B " + ", ".join(f"{x:.3f}" for x in r.runs_b))
+    print("per room: " + ", ".join(f"{room} {d:+.3f}" for room, d in c.per_room.items()))
     if args.json:
-        write_json_atomic(args.json, {"a": args.a, "b": args.b, "runs_a": na, "runs_b": nb} | c.to_json())
+        write_json_atomic(args.json, {"a": args.a, "b": args.b, "runs_a": len(ra), "runs_b": len(rb)} | r.to_json())
 
 
 if __name__ == "__main__":

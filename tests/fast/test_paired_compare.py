@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from assist3d.bench.evaluation.compare import mean_over_runs, paired_comparison
+from assist3d.bench.evaluation.compare import mean_over_runs, paired_comparison, recipe_comparison
 
 
 def test_paired_comparison_counts_wins_and_resamples_rooms_not_scans():
@@ -19,6 +19,28 @@ def test_paired_comparison_counts_wins_and_resamples_rooms_not_scans():
     # spans the room-level outcomes, which scan resampling (three of four scans agree) would narrow
     assert c.ci95[0] == pytest.approx(-0.1) and c.ci95[1] == pytest.approx(0.3)
     assert paired_comparison(a, b, draws=500).ci95 == c.ci95  # seeded
+
+
+def test_recipe_comparison_holds_the_seed_spread_that_the_paired_interval_leaves_out():
+    scans = [f"scene{r:04d}_0{k}" for r in range(1, 5) for k in range(2)]
+    a = [{s: 0.3 for s in scans}] * 2
+    # B's two seeds: one 0.2 above A on every scan, one 0.2 below; their mean equals A everywhere
+    b = [{s: 0.5 for s in scans}, {s: 0.1 for s in scans}]
+    r = recipe_comparison(a, b, draws=1000)
+    assert r.paired.mean_diff == pytest.approx(0.0) and r.paired.ci95 == (0.0, 0.0)  # rooms alone: no doubt
+    assert r.ci95[0] == pytest.approx(-0.2) and r.ci95[1] == pytest.approx(0.2)  # one seed drawn twice
+    assert r.runs_a == [0.3, 0.3] and r.runs_b == [0.5, 0.1]
+    assert r.to_json()["ci95_rooms_and_runs"] == [-0.2, 0.2] and r.to_json()["mean_diff"] == pytest.approx(0.0)
+    with pytest.raises(ValueError, match="different scans"):
+        recipe_comparison(a, [{scans[0]: 0.1}])
+
+
+def test_room_of_finds_the_scannet_room_anywhere_in_a_scan_id():
+    from assist3d.bench.evaluation.compare import room_of
+
+    assert room_of("scene0006_01") == room_of("scene0006_00") == "scene0006"
+    assert room_of("scannet_scene0451_01") == "scene0451" != room_of("scannet_scene0452_00")
+    assert room_of("office_a_scan2") == "office_a_"  # other names: the first 9 characters
 
 
 def test_paired_comparison_refuses_different_scans_and_non_finite_figures():

@@ -7,16 +7,24 @@ per-scan difference, how many scans each side wins, the difference per room, and
 interval of the mean difference that resamples **rooms** with all their scans: rescans of one room
 share its objects and are not independent draws (docs/fidelity.md, "Every change measured on the
 real scans").
+
+That interval answers "do these models beat those on other rooms?", not "do other seeds of recipe B
+beat other seeds of recipe A?": seeds of one recipe differ by as much as recipes do
+(docs/fidelity.md, "How many seeds a decision needs"). :func:`recipe_comparison` takes every run of
+each side and resamples the runs of each side as well as the rooms, so that its interval also holds
+the seed spread (with two runs a side it is still too narrow: a bootstrap of two values underrates
+their spread).
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
-ROOM_CHARS = 9  # ScanNet rescans of a room share the first 9 characters of their name (scene0006_00, _01)
+ROOM_CHARS = 9  # other names: rescans of a room share the first 9 characters (as ScanNet's scene0006_00, _01)
 
 
 @dataclass(frozen=True)
@@ -41,8 +49,15 @@ class PairedComparison:
         return out
 
 
+_SCANNET_ROOM = re.compile(r"scene\d{4}")
+
+
 def room_of(scan_id: str, room_chars: int = ROOM_CHARS) -> str:
-    return scan_id[:room_chars]
+    """The room of a scan: the ``sceneNNNN`` part of a ScanNet name wherever it stands in the id
+    (``scene0006_01`` and ``scannet_scene0451_01`` give ``scene0006`` and ``scene0451``), else the
+    first ``room_chars`` characters."""
+    m = _SCANNET_ROOM.search(scan_id)
+    return m.group(0) if m else scan_id[:room_chars]
 
 
 def paired_comparison(a: Mapping[str, float], b: Mapping[str, float], *, metric: str = "AP50",
@@ -60,7 +75,7 @@ def paired_comparison(a: Mapping[str, float], b: Mapping[str, float], *, metric:
         raise ValueError("a per-scan figure is not finite")
     diff = vb - va
     rooms = np.array([room_of(s, room_chars) for s in scans])
-    names = sorted(set(rooms))
+    names = list(dict.fromkeys(rooms))  # in the order of their first scan (the draws of the seeded bootstrap follow it)
     members = [np.flatnonzero(rooms == r) for r in names]
     rng = np.random.default_rng(seed)
     means = np.empty(draws)
@@ -85,3 +100,46 @@ def mean_over_runs(runs: list[Mapping[str, float]]) -> dict[str, float]:
         if set(r) != keys:
             raise ValueError("the runs hold different scans")
     return {s: float(np.mean([r[s] for r in runs])) for s in sorted(keys)}
+
+
+@dataclass(frozen=True)
+class RecipeComparison:
+    """``paired`` compares the per-scan means over each side's runs (rooms resampled); ``ci95`` is the
+    interval of the same mean difference with each side's runs resampled too; ``runs_a`` and
+    ``runs_b`` are each run's mean over the scans."""
+
+    paired: PairedComparison
+    ci95: tuple[float, float]
+    runs_a: list[float]
+    runs_b: list[float]
+
+    def to_json(self) -> dict:
+        return self.paired.to_json() | {"ci95_rooms_and_runs": list(self.ci95), "run_means_a": self.runs_a,
+                                         "run_means_b": self.runs_b}
+
+
+def recipe_comparison(a_runs: list[Mapping[str, float]], b_runs: list[Mapping[str, float]], *, metric: str = "AP50",
+                      room_chars: int = ROOM_CHARS, draws: int = 2000, seed: int = 0) -> RecipeComparison:
+    """Compare two recipes from their runs (each a scan id -> value mapping; all runs of both sides
+    must hold the same scans): the paired comparison of their per-scan means, and a bootstrap interval
+    of the mean difference ``b - a`` that resamples rooms (the same rooms for both sides) and, within
+    each side, runs."""
+    paired = paired_comparison(mean_over_runs(list(a_runs)), mean_over_runs(list(b_runs)), metric=metric,
+                               room_chars=room_chars, draws=draws, seed=seed)
+    scans = sorted(a_runs[0])  # every run holds these scans: checked by the paired comparison above
+    va = np.array([[float(r[s]) for s in scans] for r in a_runs])
+    vb = np.array([[float(r[s]) for s in scans] for r in b_runs])
+    rooms = np.array([room_of(s, room_chars) for s in scans])
+    names = list(dict.fromkeys(rooms))  # in the order of their first scan (the draws of the seeded bootstrap follow it)
+    members = [np.flatnonzero(rooms == r) for r in names]
+    rng = np.random.default_rng(seed)
+    means = np.empty(draws)
+    for k in range(draws):
+        cols = np.concatenate([members[i] for i in rng.integers(len(names), size=len(names))])
+        ra = rng.integers(len(va), size=len(va))
+        rb = rng.integers(len(vb), size=len(vb))
+        means[k] = vb[np.ix_(rb, cols)].mean() - va[np.ix_(ra, cols)].mean()
+    return RecipeComparison(
+        paired=paired,
+        ci95=(round(float(np.percentile(means, 2.5)), 4), round(float(np.percentile(means, 97.5)), 4)),
+        runs_a=[round(float(x), 4) for x in va.mean(1)], runs_b=[round(float(x), 4) for x in vb.mean(1)])
