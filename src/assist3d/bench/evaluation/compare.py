@@ -60,6 +60,19 @@ def room_of(scan_id: str, room_chars: int = ROOM_CHARS) -> str:
     return m.group(0) if m else scan_id[:room_chars]
 
 
+def _rooms(scans: list[str], room_chars: int) -> tuple[list[str], list[np.ndarray]]:
+    """The rooms of ``scans`` in the order of their first scan (the draws of the seeded bootstraps
+    follow it) and the indices of each room's scans."""
+    rooms = np.array([room_of(s, room_chars) for s in scans])
+    names = list(dict.fromkeys(rooms))
+    return names, [np.flatnonzero(rooms == r) for r in names]
+
+
+def _interval(means: np.ndarray) -> tuple[float, float]:
+    """The 2.5th and 97.5th percentiles of bootstrap ``means``, rounded to 4 digits."""
+    return round(float(np.percentile(means, 2.5)), 4), round(float(np.percentile(means, 97.5)), 4)
+
+
 def paired_comparison(a: Mapping[str, float], b: Mapping[str, float], *, metric: str = "AP50",
                       room_chars: int = ROOM_CHARS, draws: int = 2000, seed: int = 0) -> PairedComparison:
     """Compare per-scan figures ``a`` and ``b`` (scan id -> value); both must hold the same scans."""
@@ -74,9 +87,7 @@ def paired_comparison(a: Mapping[str, float], b: Mapping[str, float], *, metric:
     if not (np.isfinite(va).all() and np.isfinite(vb).all()):
         raise ValueError("a per-scan figure is not finite")
     diff = vb - va
-    rooms = np.array([room_of(s, room_chars) for s in scans])
-    names = list(dict.fromkeys(rooms))  # in the order of their first scan (the draws of the seeded bootstrap follow it)
-    members = [np.flatnonzero(rooms == r) for r in names]
+    names, members = _rooms(scans, room_chars)
     rng = np.random.default_rng(seed)
     means = np.empty(draws)
     for k in range(draws):
@@ -86,7 +97,7 @@ def paired_comparison(a: Mapping[str, float], b: Mapping[str, float], *, metric:
         metric=metric, scans=len(scans), rooms=len(names), mean_a=round(float(va.mean()), 4),
         mean_b=round(float(vb.mean()), 4), mean_diff=round(float(diff.mean()), 4),
         higher=int((diff > 0).sum()), lower=int((diff < 0).sum()), equal=int((diff == 0).sum()),
-        ci95=(round(float(np.percentile(means, 2.5)), 4), round(float(np.percentile(means, 97.5)), 4)),
+        ci95=_interval(means),
         per_room={r: round(float(diff[m].mean()), 4) for r, m in zip(names, members)},
     )
 
@@ -129,9 +140,7 @@ def recipe_comparison(a_runs: list[Mapping[str, float]], b_runs: list[Mapping[st
     scans = sorted(a_runs[0])  # every run holds these scans: checked by the paired comparison above
     va = np.array([[float(r[s]) for s in scans] for r in a_runs])
     vb = np.array([[float(r[s]) for s in scans] for r in b_runs])
-    rooms = np.array([room_of(s, room_chars) for s in scans])
-    names = list(dict.fromkeys(rooms))  # in the order of their first scan (the draws of the seeded bootstrap follow it)
-    members = [np.flatnonzero(rooms == r) for r in names]
+    names, members = _rooms(scans, room_chars)
     rng = np.random.default_rng(seed)
     means = np.empty(draws)
     for k in range(draws):
@@ -141,5 +150,5 @@ def recipe_comparison(a_runs: list[Mapping[str, float]], b_runs: list[Mapping[st
         means[k] = vb[np.ix_(rb, cols)].mean() - va[np.ix_(ra, cols)].mean()
     return RecipeComparison(
         paired=paired,
-        ci95=(round(float(np.percentile(means, 2.5)), 4), round(float(np.percentile(means, 97.5)), 4)),
+        ci95=_interval(means),
         runs_a=[round(float(x), 4) for x in va.mean(1)], runs_b=[round(float(x), 4) for x in vb.mean(1)])
