@@ -11,7 +11,8 @@ Rows: ``geometric`` and ``geometric+snap`` (no model; the control), then per mod
 ``hybrid_v1`` (the first hybrid recipe, without the fallback proposals) and ``hybrid+stability``
 (the stability ranking, measured and not adopted; see ``learn/segmenter/hybrid.py``),
 ``hybrid+drop_structure`` and ``learned+drop_structure`` (the network's instances linked without the
-voxels on the geometric reference's structural planes; ``HybridConfig.drop_structure``). ``--tta``
+voxels on the geometric reference's structural planes; ``HybridConfig.drop_structure``),
+``hybrid+snap_rank`` (proposals ranked by their agreement with the superpoints; ``HybridConfig.snap_rank``). ``--tta``
 adds ``learned+tta`` and ``hybrid+tta``: the same with the network's outputs averaged over 8 copies
 of each scan (4 quarter turns about z, with and without a mirror; ``infer.predict_voxels_tta``).
 AP50 is over the scans of the first --eval spec; each further spec is reported on its own; every
@@ -47,6 +48,7 @@ VARIANTS = {
     "hybrid_v1": HybridConfig(fallback_radius=None),
     "hybrid+stability": HybridConfig(stability_radii=STABILITY_RADII),
     "hybrid+drop_structure": HybridConfig(drop_structure=True),
+    "hybrid+snap_rank": HybridConfig(snap_rank=True),
 }
 
 

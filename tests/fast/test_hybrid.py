@@ -20,6 +20,7 @@ from assist3d.learn.segmenter.hybrid import (  # noqa: E402
     combine,
     labels_from_masks,
     segment_hybrid,
+    snap_agreement,
     structure_voxels,
 )
 from assist3d.learn.segmenter.infer import instances  # noqa: E402
@@ -112,6 +113,32 @@ def test_fallback_proposals_split_touching_objects_below_the_first_proposals():
     m = [summarize([match_scene(truth, s.masks, s.scores)]) for s in (first, both)]
     assert (m[0]["AR50"], m[1]["AR50"]) == (0.0, 1.0)
     assert m[0]["AP50"] == 0.0 < m[1]["AP50"]  # 1/3: the merge, a false positive, still ranks first
+
+
+def test_snap_rank_puts_a_fragment_that_cuts_a_superpoint_below_a_whole_object():
+    # two 30 cm blocks, each one superpoint; proposals: 60 % of block 1 (a fragment, the network's
+    # foreground higher there) and the whole block 0; no learned instance (foreground below 0.5)
+    cells = np.stack(np.meshgrid(np.arange(6), np.arange(6), np.arange(6), indexing="ij"), -1).reshape(-1, 3)
+    coord = np.concatenate([cells, cells + [8, 0, 0]]) * 0.05 + 0.025
+    segments = np.repeat([0, 1], len(cells))
+    block0, block1 = segments == 0, segments == 1
+    fragment = block1 & (np.arange(len(coord)) < len(cells) + int(0.6 * len(cells)))  # a slab of block 1
+    agreement = snap_agreement(np.stack([fragment, block0, block0 & False]), segments)
+    assert agreement == pytest.approx([fragment.sum() / block1.sum(), 1.0, 0.0])
+    vox = voxelize(coord, 0.05)
+    fg = np.zeros(len(vox), np.float32)
+    fg[vox.inverse] = np.where(segments == 1, 0.45, 0.40)  # one point per voxel
+    offset = np.zeros((len(vox), 3), np.float32)
+    cluster = ClusterConfig()
+    learned = instances(vox, fg, offset, cluster)
+    assert len(learned.masks) == 0
+    components = np.stack([fragment, block0])
+    plain = combine(learned, vox, fg, offset, cluster, components, segments)
+    ranked = combine(learned, vox, fg, offset, cluster, components, segments, hybrid=HybridConfig(snap_rank=True))
+    # both keep the two objects, snapped (the fragment grows to its whole block); only the order moves
+    assert np.array_equal(plain.masks[0], block1) and np.array_equal(plain.masks[1], block0)
+    assert np.array_equal(ranked.masks[0], block0) and np.array_equal(ranked.masks[1], block1)
+    assert ranked.scores[1] == pytest.approx((1 + 0.45 * 0.6) / 2, abs=0.01) and ranked.scores[1] < ranked.scores[0]
 
 
 def test_structure_voxels_take_the_majority_of_their_points():

@@ -36,6 +36,11 @@ network and objects merge through them; the proposals' scores are unchanged. Ove
 raised the network's instances alone (dev AP50 0.167 to 0.225) but not the hybrid (0.243 to 0.240;
 docs/fidelity.md, "Structural planes").
 
+``HybridConfig.snap_rank`` (off by default; measured under ``docs/results/snaprank-2026-11-27/``)
+multiplies the scores of steps 1-3 by each proposal's agreement with the superpoints (the point IoU
+between the proposal and its snapped version, :func:`snap_agreement`) before the tiers are formed: a
+fragment cuts through surface patches, a whole object is a union of them.
+
 Masks may overlap (a component can hold two learned instances without an IoU above 0.5 with
 either); ``labels`` gives each point the best-scoring mask that holds it.
 """
@@ -68,6 +73,7 @@ class HybridConfig:
     fallback_radius: float | None = 0.05
     nms_iou: float = NMS_IOU
     drop_structure: bool = False
+    snap_rank: bool = False
 
 
 def structure_voxels(vox: Voxels, on_plane: np.ndarray) -> np.ndarray:
@@ -111,6 +117,18 @@ def network_score(masks: np.ndarray, vox: Voxels, fg: np.ndarray) -> np.ndarray:
     return instance_score(mean_fg, n_vox)
 
 
+def snap_agreement(masks: np.ndarray, segments: np.ndarray, min_cover: float = SuperpointConfig.min_cover) -> np.ndarray:
+    """(M,) in [0, 1]: the point IoU of each mask of ``masks`` (M, N) bool with its snapped version
+    (:func:`superpoints.snap_masks` with the superpoint id (N,) of every point); 1 for a union of
+    superpoints, low for a mask that cuts through them."""
+    if len(masks) == 0:
+        return np.zeros(0)
+    snapped = snap_masks(masks, segments, min_cover)
+    inter = (masks & snapped).sum(1)
+    union = (masks | snapped).sum(1)
+    return np.where(union > 0, inter / np.maximum(union, 1), 0.0)
+
+
 def best_iou(masks: np.ndarray, others: np.ndarray) -> np.ndarray:
     """(M,) the highest IoU of each of ``masks`` (M, N) bool with one of ``others`` (K, N) bool (0 if K = 0)."""
     if len(masks) == 0 or len(others) == 0:
@@ -146,10 +164,15 @@ def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, offset: np.ndarr
     masks, scores = proposals(learned, vox, fg, components)
     if hybrid.stability_radii:
         scores = scores * (0.5 + 0.5 * stability(masks, vox, link_fg, offset, cluster, hybrid.stability_radii))
+    if hybrid.snap_rank:
+        scores = scores * snap_agreement(masks, segments, min_cover)
     if hybrid.fallback_radius is not None:
         extra = instances(vox, link_fg, offset, cluster.model_copy(update={"radius": hybrid.fallback_radius}))
+        extra_scores = extra.scores.astype(np.float64)
+        if hybrid.snap_rank:
+            extra_scores = extra_scores * snap_agreement(extra.masks, segments, min_cover)
         masks = np.concatenate([masks, extra.masks])
-        scores = np.concatenate([(1.0 + scores) / 2.0, extra.scores.astype(np.float64) / 2.0])
+        scores = np.concatenate([(1.0 + scores) / 2.0, extra_scores / 2.0])
     keep = mask_nms(masks, scores, hybrid.nms_iou)
     masks, scores = masks[keep], scores[keep]
     if len(masks):
