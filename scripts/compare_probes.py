@@ -9,7 +9,8 @@ whose own name ends in ``:hybrid`` is read as a folder) or ``FILE.json:ROW``, th
 ``scripts/hybrid_eval.py`` with one of its rows (``hybrid``, ``learned``, ...), averaged over every
 model in the file. Prints the mean per-scan figures of both sides, the mean difference B - A with a
 95 % interval that resamples rooms (the models at hand), a second interval that also resamples each
-side's runs (the recipes: seeds differ by as much as recipes do), each run's mean over the scans,
+side's runs (the recipes: seeds differ by as much as recipes do; drawn together when A and B are two
+rows of the same models: two rows of one FILE.json, or DIR and DIR:hybrid), each run's mean over the scans,
 the scans each side wins and the difference per room.
 """
 
@@ -59,6 +60,19 @@ def per_run(source: str, metric: str) -> list[dict[str, float]]:
     return runs
 
 
+def same_models(a: str, b: str) -> bool:
+    """True when A and B are two rows of the same models: two rows of one FILE.json, or a probe
+    folder's learned and hybrid figures; their runs are then paired model by model."""
+    def base(source: str) -> str:
+        path = Path(source)
+        if path.is_dir():
+            return str(path.resolve())
+        file, _, _row = source.rpartition(":")
+        return str(Path(file).resolve()) if file else source
+
+    return base(a) == base(b)
+
+
 def per_scan(source: str, metric: str) -> tuple[dict[str, float], int]:
     """Per-scan ``metric`` of a probe folder or ``FILE.json:ROW``, averaged over seeds or models."""
     runs = per_run(source, metric)
@@ -73,21 +87,23 @@ def main() -> None:
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     ra, rb = per_run(args.a, args.metric), per_run(args.b, args.metric)
+    paired = same_models(args.a, args.b)
     try:
-        r = recipe_comparison(ra, rb, metric=args.metric)
+        r = recipe_comparison(ra, rb, metric=args.metric, paired_runs=paired)
     except ValueError as e:
         raise SystemExit(f"{args.a} vs {args.b}: {e}") from None
     c = r.paired
     print(f"{args.metric} per scan, mean over {c.scans} scans ({c.rooms} rooms): A {c.mean_a:.3f} ({len(ra)} runs), "
           f"B {c.mean_b:.3f} ({len(rb)} runs)")
     print(f"B - A: {c.mean_diff:+.3f}, 95 % interval over rooms [{c.ci95[0]:+.3f}, {c.ci95[1]:+.3f}], over rooms "
-          f"and runs [{r.ci95[0]:+.3f}, {r.ci95[1]:+.3f}]; B higher on {c.higher}, lower on {c.lower}, equal on "
-          f"{c.equal} scans")
+          f"and {'paired ' if paired else ''}runs [{r.ci95[0]:+.3f}, {r.ci95[1]:+.3f}]; B higher on {c.higher}, "
+          f"lower on {c.lower}, equal on {c.equal} scans")
     print("each run's mean over the scans: A " + ", ".join(f"{x:.3f}" for x in r.runs_a)
           + "; B " + ", ".join(f"{x:.3f}" for x in r.runs_b))
     print("per room: " + ", ".join(f"{room} {d:+.3f}" for room, d in c.per_room.items()))
     if args.json:
-        write_json_atomic(args.json, {"a": args.a, "b": args.b, "runs_a": len(ra), "runs_b": len(rb)} | r.to_json())
+        write_json_atomic(args.json, {"a": args.a, "b": args.b, "runs_a": len(ra), "runs_b": len(rb),
+                                      "paired_runs": paired} | r.to_json())
 
 
 if __name__ == "__main__":

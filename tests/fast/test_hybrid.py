@@ -123,8 +123,10 @@ def test_snap_rank_puts_a_fragment_that_cuts_a_superpoint_below_a_whole_object()
     segments = np.repeat([0, 1], len(cells))
     block0, block1 = segments == 0, segments == 1
     fragment = block1 & (np.arange(len(coord)) < len(cells) + int(0.6 * len(cells)))  # a slab of block 1
-    agreement = snap_agreement(np.stack([fragment, block0, block0 & False]), segments)
-    assert agreement == pytest.approx([fragment.sum() / block1.sum(), 1.0, 0.0])
+    sliver = block1 & (np.arange(len(coord)) < len(cells) + int(0.4 * len(cells)))
+    agreement = snap_agreement(np.stack([fragment, block0, block0 & False, sliver]), segments)
+    # the known gap: a mask that covers no superpoint by more than half keeps its points, agreement 1
+    assert agreement == pytest.approx([fragment.sum() / block1.sum(), 1.0, 0.0, 1.0])
     vox = voxelize(coord, 0.05)
     fg = np.zeros(len(vox), np.float32)
     fg[vox.inverse] = np.where(segments == 1, 0.45, 0.40)  # one point per voxel

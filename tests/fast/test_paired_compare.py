@@ -33,6 +33,16 @@ def test_recipe_comparison_holds_the_seed_spread_that_the_paired_interval_leaves
     assert r.to_json()["ci95_rooms_and_runs"] == [-0.2, 0.2] and r.to_json()["mean_diff"] == pytest.approx(0.0)
     with pytest.raises(ValueError, match="different scans"):
         recipe_comparison(a, [{scans[0]: 0.1}])
+    # two variants of the same two models (run k is model k on both sides), figures varying by room
+    # and by model, B equal to A on every scan: rooms drawn alike for both sides, and with paired
+    # runs the models too, so no draw can show a difference; drawing the runs apart would
+    model = [{s: 0.1 * int(s[5:9]) + 0.3 * k for s in scans} for k in range(2)]
+    same = recipe_comparison(model, [dict(m) for m in model], draws=500, paired_runs=True)
+    assert same.paired.ci95 == (0.0, 0.0) and same.ci95 == (0.0, 0.0)
+    apart = recipe_comparison(model, [dict(m) for m in model], draws=500)
+    assert apart.ci95[0] < -0.1 and apart.ci95[1] > 0.1
+    with pytest.raises(ValueError, match="as many runs"):
+        recipe_comparison(model, model[:1], paired_runs=True)
 
 
 def test_room_of_finds_the_scannet_room_anywhere_in_a_scan_id():
@@ -41,6 +51,7 @@ def test_room_of_finds_the_scannet_room_anywhere_in_a_scan_id():
     assert room_of("scene0006_01") == room_of("scene0006_00") == "scene0006"
     assert room_of("scannet_scene0451_01") == "scene0451" != room_of("scannet_scene0452_00")
     assert room_of("office_a_scan2") == "office_a_"  # other names: the first 9 characters
+    assert room_of("scene00012_00") == "scene0001"  # not a ScanNet name: the first 9 characters
 
 
 def test_paired_comparison_refuses_different_scans_and_non_finite_figures():

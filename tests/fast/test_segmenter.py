@@ -473,6 +473,13 @@ def test_probe_hybrid_scores_segment_default_and_is_added_to_a_finished_folder(t
     table = probe("--seeds", "2", "--hybrid")
     assert "mean ± std hybrid" in table and "1 hybrid" in table
     assert (out / "seed_1" / "pred_hybrid" / f"{ds.scene_ids[0]}.npz").stat().st_mtime_ns == pred_stamp
+    # figures written before an option existed (its key missing) stay valid: options keep the old
+    # behaviour by default
+    res = json.loads((out / "seed_1" / "result.json").read_text())
+    del res["hybrid"]["inference"]["hybrid"]["snap_rank"]
+    (out / "seed_1" / "result.json").write_text(json.dumps(res))
+    assert probe("--seeds", "2", "--json", "--hybrid")["hybrid"]["mean"] == h["mean"]
+    assert (out / "seed_1" / "pred_hybrid" / f"{ds.scene_ids[0]}.npz").stat().st_mtime_ns == pred_stamp
     # figures made with other inference settings are recomputed, not mixed with today's
     res = json.loads((out / "seed_1" / "result.json").read_text())
     res["hybrid"]["inference"]["hybrid"]["nms_iou"] = 0.3

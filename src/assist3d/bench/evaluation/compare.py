@@ -49,7 +49,7 @@ class PairedComparison:
         return out
 
 
-_SCANNET_ROOM = re.compile(r"scene\d{4}")
+_SCANNET_ROOM = re.compile(r"scene\d{4}(?!\d)")
 
 
 def room_of(scan_id: str, room_chars: int = ROOM_CHARS) -> str:
@@ -130,11 +130,15 @@ class RecipeComparison:
 
 
 def recipe_comparison(a_runs: list[Mapping[str, float]], b_runs: list[Mapping[str, float]], *, metric: str = "AP50",
-                      room_chars: int = ROOM_CHARS, draws: int = 2000, seed: int = 0) -> RecipeComparison:
+                      room_chars: int = ROOM_CHARS, draws: int = 2000, seed: int = 0,
+                      paired_runs: bool = False) -> RecipeComparison:
     """Compare two recipes from their runs (each a scan id -> value mapping; all runs of both sides
     must hold the same scans): the paired comparison of their per-scan means, and a bootstrap interval
     of the mean difference ``b - a`` that resamples rooms (the same rooms for both sides) and, within
-    each side, runs."""
+    each side, runs. ``paired_runs``: run k of both sides is the same model (e.g. two inference
+    variants of the same models), so the same runs are drawn for both sides."""
+    if paired_runs and len(a_runs) != len(b_runs):
+        raise ValueError(f"paired runs need as many runs on both sides ({len(a_runs)} vs {len(b_runs)})")
     paired = paired_comparison(mean_over_runs(list(a_runs)), mean_over_runs(list(b_runs)), metric=metric,
                                room_chars=room_chars, draws=draws, seed=seed)
     scans = sorted(a_runs[0])  # every run holds these scans: checked by the paired comparison above
@@ -146,7 +150,7 @@ def recipe_comparison(a_runs: list[Mapping[str, float]], b_runs: list[Mapping[st
     for k in range(draws):
         cols = np.concatenate([members[i] for i in rng.integers(len(names), size=len(names))])
         ra = rng.integers(len(va), size=len(va))
-        rb = rng.integers(len(vb), size=len(vb))
+        rb = ra if paired_runs else rng.integers(len(vb), size=len(vb))
         means[k] = vb[np.ix_(rb, cols)].mean() - va[np.ix_(ra, cols)].mean()
     return RecipeComparison(
         paired=paired,

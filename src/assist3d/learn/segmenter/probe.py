@@ -65,6 +65,16 @@ def hybrid_settings() -> dict:
                                   "superpoint": asdict(SuperpointConfig())}))
 
 
+def _current(stored: object) -> bool:
+    """Whether hybrid figures made with the ``stored`` settings are today's. A setting missing from
+    ``stored`` takes today's default: options are added with defaults that keep the old behaviour,
+    so figures written before an option existed stay valid."""
+    today = hybrid_settings()
+    if not isinstance(stored, dict) or set(stored) - set(today):
+        return False
+    return all(isinstance(stored.get(k, {}), dict) and {**v, **stored.get(k, {})} == v for k, v in today.items())
+
+
 @dataclass(frozen=True)
 class ProbeRequest:
     train: tuple[str, ...]
@@ -241,8 +251,7 @@ def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", lo
         runs.append(run)
         emit("seed_done", {"seed": seed, "cached": False, **run})
     summary = summarise_runs([{k: v for k, v in r.items() if k != "hybrid"} for r in runs])
-    settings = hybrid_settings()
-    if runs and all(isinstance(r.get("hybrid"), dict) and r["hybrid"].get("inference") == settings for r in runs):
+    if runs and all(isinstance(r.get("hybrid"), dict) and _current(r["hybrid"].get("inference")) for r in runs):
         summary["hybrid"] = summarise_runs([r["hybrid"] for r in runs])
     summary["request"] = req.as_dict()
     write_json_atomic(out / "summary.json", summary)
@@ -253,9 +262,9 @@ def _with_hybrid(run: dict, sdir: Path, req: ProbeRequest, seed: int, emit: Call
     """``run`` (a seed's result.json) with its ``hybrid`` figures, computed from the seed's model.pt
     when missing or made with other inference settings, and then saved back into result.json; the
     other figures are unchanged."""
-    settings = hybrid_settings()
-    if isinstance(run.get("hybrid"), dict) and run["hybrid"].get("inference") == settings:
+    if isinstance(run.get("hybrid"), dict) and _current(run["hybrid"].get("inference")):
         return run
+    settings = hybrid_settings()
     model_path = sdir / "model.pt"
     if not model_path.is_file():
         raise DataError(f"{model_path}: not found, so seed {seed} cannot be scored with hybrid inference; "
