@@ -16,18 +16,14 @@ from pathlib import Path
 import numpy as np
 
 from assist3d.bench.data import open_dataset
-from assist3d.bench.evaluation.compare import room_of
+from assist3d.bench.evaluation.compare import room_means
 from assist3d.bench.evaluation.runner import evaluate_dataset
 
 KEYS = ("AP", "AP50", "AP25", "AR")
 
 
 def per_room_ap50(per_scene: dict[str, dict]) -> dict[str, float]:
-    rooms: dict[str, list[float]] = {}
-    for sid, m in per_scene.items():
-        if m.get("AP50") is not None:
-            rooms.setdefault(room_of(sid), []).append(m["AP50"])
-    return {r: float(np.mean(v)) for r, v in sorted(rooms.items())}
+    return room_means({sid: m.get("AP50") for sid, m in per_scene.items()})
 
 
 def row_from_runs(name: str, runs: list[dict]) -> dict:

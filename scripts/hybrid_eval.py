@@ -33,7 +33,7 @@ import torch
 
 from assist3d.bench.data import open_dataset
 from assist3d.bench.evaluation.ap import match_scene, summarize
-from assist3d.bench.evaluation.compare import room_of
+from assist3d.bench.evaluation.compare import room_means
 from assist3d.core.fileio import write_json_atomic
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.features import voxel_features, voxelize
@@ -55,9 +55,7 @@ VARIANTS = {
 def _metrics(matches: list) -> dict:
     s = summarize(matches)
     per_scan = {m.scene_id: summarize([m]) for m in matches}
-    rooms = sorted({room_of(sid) for sid in per_scan})
-    per_room = {r: round(float(np.mean([v["AP50"] for sid, v in per_scan.items() if room_of(sid) == r])), 4)
-                for r in rooms}
+    per_room = {r: round(v, 4) for r, v in room_means({sid: v["AP50"] for sid, v in per_scan.items()}).items()}
     scans = {sid: {k: round(float(v[k]), 4) for k in ("AP", "AP50", "AP25")} for sid, v in per_scan.items()}
     return {k: round(float(s[k]), 4) for k in ("AP", "AP50", "AP25", "AR")} | {"rooms": per_room, "scans": scans}
 

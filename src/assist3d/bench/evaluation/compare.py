@@ -60,6 +60,15 @@ def room_of(scan_id: str, room_chars: int = ROOM_CHARS) -> str:
     return m.group(0) if m else scan_id[:room_chars]
 
 
+def room_means(per_scan: Mapping[str, float | None], room_chars: int = ROOM_CHARS) -> dict[str, float]:
+    """The mean of per-scan figures (scan id -> value; None values left out) per room, rooms sorted."""
+    rooms: dict[str, list[float]] = {}
+    for sid, v in per_scan.items():
+        if v is not None:
+            rooms.setdefault(room_of(sid, room_chars), []).append(float(v))
+    return {r: float(np.mean(v)) for r, v in sorted(rooms.items())}
+
+
 def _rooms(scans: list[str], room_chars: int) -> tuple[list[str], list[np.ndarray]]:
     """The rooms of ``scans`` in the order of their first scan (the draws of the seeded bootstraps
     follow it) and the indices of each room's scans."""

@@ -127,9 +127,13 @@ def snap_agreement(masks: np.ndarray, segments: np.ndarray, min_cover: float = S
     (a sliver across several patches is not demoted): measured as registered, a known gap."""
     if len(masks) == 0:
         return np.zeros(0)
-    snapped = snap_masks(masks, segments, min_cover)
-    inter = (masks & snapped).sum(1)
-    union = (masks | snapped).sum(1)
+    return _row_iou(masks, snap_masks(masks, segments, min_cover))
+
+
+def _row_iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(M,) the point IoU of row k of ``a`` with row k of ``b`` (both (M, N) bool; 0 for two empty rows)."""
+    inter = (a & b).sum(1)
+    union = (a | b).sum(1)
     return np.where(union > 0, inter / np.maximum(union, 1), 0.0)
 
 
@@ -168,19 +172,21 @@ def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, offset: np.ndarr
     masks, scores = proposals(learned, vox, fg, components)
     if hybrid.stability_radii:
         scores = scores * (0.5 + 0.5 * stability(masks, vox, link_fg, offset, cluster, hybrid.stability_radii))
-    if hybrid.snap_rank:
-        scores = scores * snap_agreement(masks, segments, min_cover)
+    first = len(masks)
     if hybrid.fallback_radius is not None:
         extra = instances(vox, link_fg, offset, cluster.model_copy(update={"radius": hybrid.fallback_radius}))
-        extra_scores = extra.scores.astype(np.float64)
-        if hybrid.snap_rank:
-            extra_scores = extra_scores * snap_agreement(extra.masks, segments, min_cover)
         masks = np.concatenate([masks, extra.masks])
-        scores = np.concatenate([(1.0 + scores) / 2.0, extra_scores / 2.0])
+        scores = np.concatenate([scores, extra.scores.astype(np.float64)])
+    # snap_rank snaps every proposal to score it, and the kept ones reuse those masks (snapping is row by row)
+    snapped = snap_masks(masks, segments, min_cover) if hybrid.snap_rank and len(masks) else None
+    if snapped is not None:
+        scores = scores * _row_iou(masks, snapped)
+    if hybrid.fallback_radius is not None:
+        scores = np.concatenate([(1.0 + scores[:first]) / 2.0, scores[first:] / 2.0])
     keep = mask_nms(masks, scores, hybrid.nms_iou)
     masks, scores = masks[keep], scores[keep]
     if len(masks):
-        masks = snap_masks(masks, segments, min_cover)
+        masks = snapped[keep] if snapped is not None else snap_masks(masks, segments, min_cover)
     return Segmentation(masks=masks, scores=scores.astype(np.float32), labels=labels_from_masks(masks))
 
 
