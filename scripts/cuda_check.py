@@ -1,0 +1,227 @@
+"""Exercise the CUDA paths on a GPU machine and write what they did to one JSON file.
+
+The CPU is where this project is developed and tested; this script is the check of the GPU code
+paths, run when a GPU is at hand (docs/model.md, "CUDA check"):
+
+- Mask3D-style model: the first loss on the same batch and weights on the CPU and on CUDA (fp32),
+  then training steps with AMP in bf16, in fp16 with the gradient scaler (bf16 reported as
+  unsupported to reach that branch) and in fp32; the loss must fall and stay finite;
+  ``train()`` to a checkpoint on CUDA, resumed for one more epoch; ``predict_scene`` on CUDA against the CPU
+  with the same weights; ``run_model_bench`` on CUDA (forward, forward+backward, peak memory).
+- CPU segmenter: the shipped model's per-voxel outputs on a real scan on the CPU and on CUDA,
+  ``segment_hybrid`` on both (instances, AP50 against the scan's labels, seconds), and training
+  steps on CUDA (the loss must fall).
+
+    python scripts/cuda_check.py --scan SCAN.npy --out report.json [--steps 60]
+
+Every section runs even when another fails; a failure is recorded with its traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+import traceback
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from assist3d.learn.engine.config import parse_train_config
+from assist3d.learn.engine.toy import make_toy_scene
+from assist3d.learn.engine.train import MemorySource, Trainer
+
+DEV = "cuda"  # --device cpu runs the same sections on the CPU: a dry run of this script where there is no GPU
+
+MODEL = {"stem_channels": 16, "stem_kernel": 3, "enc_channels": [16, 32, 64, 96], "enc_blocks": [1, 1, 1, 1],
+         "dec_channels": [96, 64, 48, 48], "dec_blocks": [1, 1, 1, 1], "hidden": 64, "heads": 4, "ffn": 256,
+         "num_passes": 2, "num_queries": 32, "num_queries_eval": 32}
+
+
+def _cfg(**optim) -> dict:
+    return {"threads": 4, "seed": 0, "model": MODEL, "data": {"voxel_size": 0.05}, "augment": {"enabled": False},
+            "optim": {"lr": 0.003, "batch_size": 2, "epochs": 2, "pct_start": 0.3, **optim}, "predict": {"top_k": 32}}
+
+
+def _toy(n: int) -> list:
+    return [make_toy_scene(f"toy{i}", rng=np.random.default_rng(i), num_objects=6, room_m=5.0, density_per_m2=2500.0)
+            for i in range(n)]
+
+
+def _sync() -> None:
+    if torch.cuda.is_available():
+        torch.cuda.synchronize()
+
+
+def mask3d_first_loss_parity() -> dict:
+    cfg = parse_train_config(_cfg())
+    scenes = _toy(2)
+    out = {}
+    for dev in ("cpu", DEV):
+        tr = Trainer(cfg, MemorySource(scenes), steps_total=10, device=dev)
+        tr.model.eval()
+        with torch.no_grad():
+            loss, _ = tr.batch_loss([0, 1], rng=np.random.default_rng(0), augment=False)
+        out[dev] = float(loss)
+    out["abs_diff"] = abs(out["cpu"] - out[DEV])
+    out["ok"] = out["abs_diff"] <= 1e-3 * max(1.0, abs(out["cpu"]))
+    return out
+
+
+def mask3d_amp_training(steps: int) -> dict:
+    scenes = _toy(4)
+    res = {}
+    for mode in ("bf16", "fp16", "fp32"):
+        cfg = parse_train_config(_cfg(amp=mode != "fp32"))
+        real = torch.cuda.is_bf16_supported
+        if mode == "fp16" and DEV == "cuda":
+            torch.cuda.is_bf16_supported = lambda *a, **k: False  # reach the fp16 + GradScaler branch
+        try:
+            tr = Trainer(cfg, MemorySource(scenes), steps_total=steps, device=DEV)
+        finally:
+            torch.cuda.is_bf16_supported = real
+        rng = np.random.default_rng(0)
+        losses = []
+        _sync()
+        t0 = time.perf_counter()
+        for s in range(steps):
+            idx = [int(i) for i in rng.choice(len(scenes), 2, replace=False)]
+            st = tr.step(idx, rng=np.random.default_rng(s))
+            losses.append(float(st.loss))
+        _sync()
+        sec = (time.perf_counter() - t0) / steps
+        first, last = float(np.mean(losses[:5])), float(np.mean(losses[-5:]))
+        res[mode] = {"amp": tr.use_amp, "dtype": str(tr.amp_dtype) if tr.use_amp else "float32",
+                     "scaler": tr.scaler is not None, "scale": float(tr.scaler.get_scale()) if tr.scaler else None,
+                     "loss_first5": round(first, 4), "loss_last5": round(last, 4), "finite": bool(np.isfinite(losses).all()),
+                     "seconds_per_step": round(sec, 4), "ok": bool(np.isfinite(losses).all() and last < first)}
+    return res
+
+
+def mask3d_train_resume_predict(tmp: Path) -> dict:
+    from assist3d.learn.engine.predict import predict_scene
+    from assist3d.learn.engine.train import build_model, config_from_checkpoint, load_checkpoint, train
+
+    scenes = _toy(4)
+    out = tmp / "m3d"
+    cfg = parse_train_config({**_cfg(epochs=2), "device": DEV})
+    r1 = train(cfg, out, source=MemorySource(scenes))
+    cfg3 = parse_train_config({**_cfg(epochs=3), "device": DEV})
+    r2 = train(cfg3, out, resume=True, source=MemorySource(scenes))
+    state = load_checkpoint(out / "last.pt", map_location="cpu")
+    tcfg = config_from_checkpoint(state)
+    preds = {}
+    for dev in ("cpu", DEV):
+        model = build_model(tcfg.model)
+        model.load_state_dict(state["model"])
+        model.to(dev).eval()
+        with torch.no_grad():
+            preds[dev] = predict_scene(model, scenes[0], tcfg.data.voxel_size, tcfg.predict, device=dev)
+    a, b = preds["cpu"], preds[DEV]
+    n = min(len(a.scores), len(b.scores))
+    agree = float((a.masks[:n] == b.masks[:n]).mean()) if n else None
+    return {"steps_first": r1.steps, "steps_after_resume": r2.steps, "last_loss": r2.last_loss,
+            "masks_cpu": int(len(a.scores)), "masks_cuda": int(len(b.scores)),
+            "mask_point_agreement": agree, "max_score_diff": float(np.abs(a.scores[:n] - b.scores[:n]).max()) if n else None,
+            "ok": bool(r2.steps > r1.steps and np.isfinite(r2.last_loss) and len(a.scores) == len(b.scores)
+                       and (agree is None or agree > 0.99))}
+
+
+def mask3d_bench() -> dict:
+    from assist3d.learn.engine.bench import run_model_bench
+    from assist3d.learn.engine.config import TrainConfig
+
+    out = {}
+    for dev in (DEV,):
+        r = run_model_bench(TrainConfig(), points=100_000, device=dev, repeats=3)
+        out[dev] = {k: (round(v, 4) if isinstance(v, float) else v) for k, v in r.as_dict().items()}
+    return out
+
+
+def segmenter_shipped(scan: Path) -> dict:
+    from assist3d.bench.data.array import ArrayDataset
+    from assist3d.bench.evaluation.ap import match_scene, summarize
+    from assist3d.learn.segmenter.checkpoint import load_segmenter
+    from assist3d.learn.segmenter.hybrid import segment_hybrid
+    from assist3d.learn.segmenter.infer import predict_voxels
+    from assist3d.learn.segmenter.shipped import shipped_model_path
+    from assist3d.learn.segmenter.features import voxel_features, voxelize
+
+    s = ArrayDataset(scan).load(scan.stem)
+    res: dict = {"scan": scan.name, "points": int(len(s.coord))}
+    outs = {}
+    for dev in ("cpu", DEV):
+        loaded = load_segmenter(shipped_model_path(), dev)
+        cfg = loaded.config
+        vox = voxelize(s.coord, cfg.net.voxel_size, s.color)
+        with torch.no_grad():
+            fg, off = predict_voxels(loaded.model, vox.coords, voxel_features(vox, use_color=cfg.net.use_color), dev)
+        _sync()
+        t0 = time.perf_counter()
+        seg = segment_hybrid(loaded.model, cfg, s.coord, s.color, device=dev)
+        _sync()
+        sec = time.perf_counter() - t0
+        m = summarize([match_scene(s.instance, seg.masks, seg.scores, valid=s.valid, scene_id=scan.stem)])
+        outs[dev] = (fg, off, seg)
+        res[dev] = {"instances": int(len(seg.scores)), "AP50": round(float(m["AP50"]), 4),
+                    "AP25": round(float(m["AP25"]), 4), "seconds": round(sec, 2)}
+    (fc, oc, sc), (fg_, og, sg) = outs["cpu"], outs[DEV]
+    res["fg_max_abs_diff"] = float(np.abs(fc - fg_).max())
+    res["offset_max_abs_diff"] = float(np.abs(oc - og).max())
+    res["same_instances"] = bool(len(sc.scores) == len(sg.scores) and np.array_equal(sc.masks, sg.masks))
+    res["ok"] = bool(res["fg_max_abs_diff"] < 1e-3 and abs(res["cpu"]["AP50"] - res[DEV]["AP50"]) < 0.01)
+    return res
+
+
+def segmenter_training(tmp: Path, steps: int) -> dict:
+    from assist3d.learn.segmenter.config import parse_segmenter_config
+    from assist3d.learn.segmenter.data import Scene
+    from assist3d.learn.segmenter.train import Budget, train_segmenter
+
+    scenes = [Scene.from_sample(x) for x in _toy(6)]
+    cfg = parse_segmenter_config({}, "defaults")
+    rec = train_segmenter(cfg, scenes, tmp / "seg", seed=0, budget=Budget(steps=steps, minutes=None), device=DEV)
+    rows = (tmp / "seg" / "train_log.csv").read_text().splitlines()
+    head = rows[0].split(",")
+    loss = np.array([float(r.split(",")[head.index("loss")]) for r in rows[1:]])
+    k = max(1, min(10, len(loss) // 4))
+    first, last = float(loss[:k].mean()), float(loss[-k:].mean())
+    return {"steps": int(len(loss)), "loss_first": round(first, 4), "loss_last": round(last, 4),
+            "train_seconds": round(rec.train_seconds, 1),
+            "ok": bool(np.isfinite(loss).all() and last < first)}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scan", type=Path, required=True, help="a real scan (N, 8) .npy with instance labels")
+    ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument("--steps", type=int, default=60)
+    ap.add_argument("--tmp", type=Path, default=Path("/tmp/cuda_check"))
+    ap.add_argument("--device", default="cuda", help="cuda (the check) or cpu (a dry run of the script)")
+    a = ap.parse_args()
+    global DEV
+    DEV = a.device
+    if DEV == "cuda" and not torch.cuda.is_available():
+        raise SystemExit("no CUDA device: this script checks the GPU paths (--device cpu for a dry run)")
+    report: dict = {"torch": torch.__version__, "cuda": torch.version.cuda, "device": DEV,
+                    "gpu": torch.cuda.get_device_name(0) if DEV == "cuda" else None}
+    sections = [("mask3d_first_loss_parity", mask3d_first_loss_parity),
+                ("mask3d_amp_training", lambda: mask3d_amp_training(a.steps)),
+                ("mask3d_train_resume_predict", lambda: mask3d_train_resume_predict(a.tmp)),
+                ("mask3d_bench", mask3d_bench),
+                ("segmenter_shipped", lambda: segmenter_shipped(a.scan)),
+                ("segmenter_training", lambda: segmenter_training(a.tmp, a.steps))]
+    for name, fn in sections:
+        t0 = time.perf_counter()
+        try:
+            report[name] = fn()
+        except Exception:  # noqa: BLE001 - a check records every failure and goes on
+            report[name] = {"ok": False, "error": traceback.format_exc()[-3000:]}
+        report[name]["section_seconds"] = round(time.perf_counter() - t0, 1)
+        print(name, json.dumps(report[name])[:600], flush=True)
+        a.out.write_text(json.dumps(report, indent=1))
+
+
+if __name__ == "__main__":
+    main()
