@@ -1,0 +1,65 @@
+"""Table of the generator comparison with today's defaults from the committed per-seed results
+(per_seed/GENERATOR-seedK.json, each a probe seed's result.json), and the issue's target check.
+
+    python docs/results/fidelity-ema-2026-11-27/table.py
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from assist3d.bench.evaluation.compare import room_means
+
+HERE = Path(__file__).resolve().parent
+NAMES = {"assist3d": "ASSIST-3D", "randomrooms": "RandomRooms-style", "mesh-sampled": "mesh-sampled",
+         "holodeck-style": "Holodeck-style", "no-context": "no-context"}
+
+
+def runs(gen: str, part: str) -> list[dict]:
+    out = []
+    for f in sorted(HERE.glob(f"per_seed/{gen}-seed*.json")):
+        r = json.loads(f.read_text())
+        out.append(r if part == "learned" else r["hybrid"])
+    return out
+
+
+def main() -> None:
+    gens = [g for g in NAMES if list(HERE.glob(f"per_seed/{g}-seed*.json"))]
+    rooms = sorted({sid[:9] for g in gens for r in runs(g, "learned") for sid in r["per_scene"]})
+    print("| training data | inference | seeds | AP50 mean ± std | AP50 per seed | AP25 mean | "
+          + " | ".join(f"AP50 {r}" for r in rooms) + " |")
+    print("|---|---|---:|---:|---|---:|" + "---:|" * len(rooms))
+    stats: dict = {}
+    for part in ("learned", "hybrid"):
+        for g in gens:
+            rs = runs(g, part)
+            a50 = np.array([r["AP50"] for r in rs])
+            sd = float(a50.std(ddof=1)) if len(a50) > 1 else float("nan")
+            stats[(g, part)] = (a50, sd)
+            per_room = [room_means({s: m["AP50"] for s, m in r["per_scene"].items()}) for r in rs]
+            room = [np.mean([pr[k] for pr in per_room]) for k in rooms]
+            print(f"| {NAMES[g]} | {part} | {len(rs)} | {a50.mean():.3f} ± {sd:.3f} | "
+                  + " / ".join(f"{x:.3f}" for x in a50) + f" | {np.mean([r['AP25'] for r in rs]):.3f} | "
+                  + " | ".join(f"{x:.3f}" for x in room) + " |")
+    print()
+    for part in ("learned", "hybrid"):
+        a, sa = stats[("assist3d", part)]
+        for other in ("mesh-sampled", "randomrooms"):
+            if (other, part) not in stats:
+                continue
+            b, sb = stats[(other, part)]
+            n = min(len(a), len(b))
+            gap = a.mean() - b.mean()
+            big = max(sa, sb)
+            ahead = int((a[:n] > b[:n]).sum())
+            verdict = ("pending (fewer than 3 seeds)" if min(len(a), len(b)) < 3
+                       else "met" if gap > big else "not met")
+            print(f"{part}: ASSIST-3D vs {NAMES[other]}: gap {gap:+.3f}, larger std {big:.3f}, ahead in {ahead} of {n} "
+                  f"paired seeds, seeds {len(a)}/{len(b)}: target {verdict}")
+
+
+if __name__ == "__main__":
+    main()
