@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import tempfile
 import time
 import traceback
 from pathlib import Path
@@ -124,8 +125,10 @@ def mask3d_train_resume_predict(tmp: Path) -> dict:
     return {"steps_first": r1.steps, "steps_after_resume": r2.steps, "last_loss": r2.last_loss,
             "masks_cpu": int(len(a.scores)), "masks_cuda": int(len(b.scores)),
             "mask_point_agreement": agree, "max_score_diff": float(np.abs(a.scores[:n] - b.scores[:n]).max()) if n else None,
-            "ok": bool(r2.steps > r1.steps and np.isfinite(r2.last_loss) and len(a.scores) == len(b.scores)
-                       and (agree is None or agree > 0.99))}
+            # no mask on either device shows nothing about agreement: ok is then None, not True
+            "ok": (None if n == 0 and len(a.scores) == len(b.scores) and r2.steps > r1.steps
+                   else bool(r2.steps > r1.steps and np.isfinite(r2.last_loss) and len(a.scores) == len(b.scores)
+                             and agree is not None and agree > 0.99))}
 
 
 def mask3d_bench() -> dict:
@@ -197,11 +200,14 @@ def main() -> None:
     ap.add_argument("--scan", type=Path, required=True, help="a real scan (N, 8) .npy with instance labels")
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--steps", type=int, default=60)
-    ap.add_argument("--tmp", type=Path, default=Path("/tmp/cuda_check"))
+    ap.add_argument("--tmp", type=Path, default=None, help="scratch folder (default: a new temporary one; "
+                    "an old one would let training resume from an earlier run)")
     ap.add_argument("--device", default="cuda", help="cuda (the check) or cpu (a dry run of the script)")
     a = ap.parse_args()
     global DEV
     DEV = a.device
+    if a.tmp is None:
+        a.tmp = Path(tempfile.mkdtemp(prefix="cuda_check_"))
     if DEV == "cuda" and not torch.cuda.is_available():
         raise SystemExit("no CUDA device: this script checks the GPU paths (--device cpu for a dry run)")
     report: dict = {"torch": torch.__version__, "cuda": torch.version.cuda, "device": DEV,

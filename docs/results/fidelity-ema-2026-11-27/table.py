@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from assist3d.bench.evaluation.compare import room_means
+from assist3d.bench.evaluation.compare import room_means, room_of
 
 HERE = Path(__file__).resolve().parent
 NAMES = {"assist3d": "ASSIST-3D", "randomrooms": "RandomRooms-style", "mesh-sampled": "mesh-sampled",
@@ -20,7 +20,8 @@ NAMES = {"assist3d": "ASSIST-3D", "randomrooms": "RandomRooms-style", "mesh-samp
 
 def runs(gen: str, part: str) -> list[dict]:
     out = []
-    for f in sorted(HERE.glob(f"per_seed/{gen}-seed*.json")):
+    files = sorted(HERE.glob(f"per_seed/{gen}-seed*.json"), key=lambda f: int(f.stem.rsplit("seed", 1)[1]))
+    for f in files:
         r = json.loads(f.read_text())
         out.append(r if part == "learned" else r["hybrid"])
     return out
@@ -28,7 +29,9 @@ def runs(gen: str, part: str) -> list[dict]:
 
 def main() -> None:
     gens = [g for g in NAMES if list(HERE.glob(f"per_seed/{g}-seed*.json"))]
-    rooms = sorted({sid[:9] for g in gens for r in runs(g, "learned") for sid in r["per_scene"]})
+    rooms = sorted({room_of(sid) for g in gens for r in runs(g, "learned") for sid in r["per_scene"]})
+    print("AP50 per seed is pooled over the 10 scans; the room columns are means of per-scan AP50 (over the "
+          "room's scans and the seeds), so they do not average to it.\n")
     print("| training data | inference | seeds | AP50 mean ± std | AP50 per seed | AP25 mean | "
           + " | ".join(f"AP50 {r}" for r in rooms) + " |")
     print("|---|---|---:|---:|---|---:|" + "---:|" * len(rooms))
@@ -37,8 +40,9 @@ def main() -> None:
         for g in gens:
             rs = runs(g, part)
             a50 = np.array([r["AP50"] for r in rs])
+            seeds = [r["seed"] for r in rs]
             sd = float(a50.std(ddof=1)) if len(a50) > 1 else float("nan")
-            stats[(g, part)] = (a50, sd)
+            stats[(g, part)] = (a50, sd, seeds)
             per_room = [room_means({s: m["AP50"] for s, m in r["per_scene"].items()}) for r in rs]
             room = [np.mean([pr[k] for pr in per_room]) for k in rooms]
             print(f"| {NAMES[g]} | {part} | {len(rs)} | {a50.mean():.3f} ± {sd:.3f} | "
@@ -46,18 +50,23 @@ def main() -> None:
                   + " | ".join(f"{x:.3f}" for x in room) + " |")
     print()
     for part in ("learned", "hybrid"):
-        a, sa = stats[("assist3d", part)]
+        a, sa, seeds_a = stats[("assist3d", part)]
         for other in ("mesh-sampled", "randomrooms"):
             if (other, part) not in stats:
                 continue
-            b, sb = stats[(other, part)]
-            n = min(len(a), len(b))
+            b, sb, seeds_b = stats[(other, part)]
+            common = sorted(set(seeds_a) & set(seeds_b))
+            pa = np.array([a[seeds_a.index(k)] for k in common])
+            pb = np.array([b[seeds_b.index(k)] for k in common])
+            n = len(common)
             gap = a.mean() - b.mean()
             big = max(sa, sb)
-            ahead = int((a[:n] > b[:n]).sum())
+            ahead = int((pa > pb).sum())
+            paired = float((pa - pb).mean()) if n else float("nan")
             verdict = ("pending (fewer than 3 seeds)" if min(len(a), len(b)) < 3
                        else "met" if gap > big else "not met")
-            print(f"{part}: ASSIST-3D vs {NAMES[other]}: gap {gap:+.3f}, larger std {big:.3f}, ahead in {ahead} of {n} "
+            print(f"{part}: ASSIST-3D vs {NAMES[other]}: gap of means {gap:+.3f}, paired gap {paired:+.3f}, larger std "
+                  f"{big:.3f}, ahead in {ahead} of {n} "
                   f"paired seeds, seeds {len(a)}/{len(b)}: target {verdict}")
 
 
