@@ -7,13 +7,16 @@
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
 
-from assist3d.bench.evaluation.compare import room_means, room_of
+from assist3d.bench.evaluation.compare import room_of
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parents[2] / "scripts"))
+from fidelity_table import row_from_runs  # noqa: E402  (the per-room and mean/std rows of fidelity.sh's table)
 NAMES = {"assist3d": "ASSIST-3D", "randomrooms": "RandomRooms-style", "mesh-sampled": "mesh-sampled",
          "holodeck-style": "Holodeck-style", "no-context": "no-context"}
 
@@ -41,13 +44,12 @@ def main() -> None:
             rs = runs(g, part)
             a50 = np.array([r["AP50"] for r in rs])
             seeds = [r["seed"] for r in rs]
-            sd = float(a50.std(ddof=1)) if len(a50) > 1 else float("nan")
+            row = row_from_runs(NAMES[g], rs)
+            sd = row["AP50"][1] if len(a50) > 1 else float("nan")
             stats[(g, part)] = (a50, sd, seeds)
-            per_room = [room_means({s: m["AP50"] for s, m in r["per_scene"].items()}) for r in rs]
-            room = [np.mean([pr[k] for pr in per_room]) for k in rooms]
-            print(f"| {NAMES[g]} | {part} | {len(rs)} | {a50.mean():.3f} ± {sd:.3f} | "
-                  + " / ".join(f"{x:.3f}" for x in a50) + f" | {np.mean([r['AP25'] for r in rs]):.3f} | "
-                  + " | ".join(f"{x:.3f}" for x in room) + " |")
+            print(f"| {NAMES[g]} | {part} | {len(rs)} | {row['AP50'][0]:.3f} ± {sd:.3f} | "
+                  + " / ".join(f"{x:.3f}" for x in a50) + f" | {row['AP25'][0]:.3f} | "
+                  + " | ".join(f"{row['rooms'][k]:.3f}" for k in rooms) + " |")
     print()
     for part in ("learned", "hybrid"):
         a, sa, seeds_a = stats[("assist3d", part)]
