@@ -2,6 +2,9 @@
 (per_seed/GENERATOR-seedK.json, each a probe seed's result.json), and the issue's target check.
 
     python docs/results/fidelity-ema-2026-11-27/table.py
+
+Then, from scene0451_01-*.json (``scripts/hybrid_eval.py`` over the same models with
+``--eval array:../shared/data/real/scannet_scene0451_01.npy``), the same models on that scan.
 """
 
 from __future__ import annotations
@@ -70,6 +73,36 @@ def main() -> None:
             print(f"{part}: ASSIST-3D vs {NAMES[other]}: gap of means {gap:+.3f}, paired gap {paired:+.3f}, larger std "
                   f"{big:.3f}, ahead in {ahead} of {n} "
                   f"paired seeds, seeds {len(a)}/{len(b)}: target {verdict}")
+    scene0451()
+
+
+def scene0451() -> None:
+    """AP50 on scene0451_01 per generator (learned and hybrid rows of hybrid_eval.py), seeds in order."""
+    files = sorted(HERE.glob("scene0451_01-*.json"))
+    if not files:
+        return
+    per: dict[tuple[str, str], dict[int, float]] = {}
+    control = None
+    for f in files:
+        d = json.loads(f.read_text())
+        control = control or d["control"]
+        for path, rows in d["models"].items():
+            parts = Path(path).parts  # .../probe/GENERATOR/seed_K/model.pt
+            gen, seed = parts[-3], int(parts[-2].removeprefix("seed_"))
+            for part in ("learned", "hybrid"):
+                per.setdefault((gen, part), {})[seed] = rows[part][0]["AP50"]  # the first (only) --eval spec
+    print("\nscene0451_01 (one scan, not in the dev set), AP50; geometric reference "
+          f"{control['geometric'][0]['AP50']:.3f}:\n")
+    print("| training data | inference | seeds | AP50 mean ± std | AP50 per seed |")
+    print("|---|---|---:|---:|---|")
+    for part in ("learned", "hybrid"):
+        for g in NAMES:
+            if (g, part) not in per:
+                continue
+            v = np.array([per[(g, part)][k] for k in sorted(per[(g, part)])])
+            sd = v.std(ddof=1) if len(v) > 1 else float("nan")
+            print(f"| {NAMES[g]} | {part} | {len(v)} | {v.mean():.3f} ± {sd:.3f} | "
+                  + " / ".join(f"{x:.3f}" for x in v) + " |")
 
 
 if __name__ == "__main__":
