@@ -54,6 +54,13 @@ def main() -> None:
                   + " / ".join(f"{x:.3f}" for x in a50) + f" | {row['AP25'][0]:.3f} | "
                   + " | ".join(f"{row['rooms'][k]:.3f}" for k in rooms) + " |")
     print()
+    target_lines(stats)
+    scene0451()
+
+
+def target_lines(stats: dict) -> None:
+    """The issue's target test, ASSIST-3D against mesh-sampled and RandomRooms-style: ``stats`` maps
+    (generator, part) to (AP50 per seed, sample std, seed ids)."""
     for part in ("learned", "hybrid"):
         a, sa, seeds_a = stats[("assist3d", part)]
         for other in ("mesh-sampled", "randomrooms"):
@@ -73,7 +80,6 @@ def main() -> None:
             print(f"{part}: ASSIST-3D vs {NAMES[other]}: gap of means {gap:+.3f}, paired gap {paired:+.3f}, larger std "
                   f"{big:.3f}, ahead in {ahead} of {n} "
                   f"paired seeds, seeds {len(a)}/{len(b)}: target {verdict}")
-    scene0451()
 
 
 def scene0451() -> None:
@@ -85,25 +91,38 @@ def scene0451() -> None:
     control = None
     for f in files:
         d = json.loads(f.read_text())
-        control = control or d["control"]
+        if len(d["eval"]) != 1 or "scene0451_01" not in d["eval"][0]:
+            raise SystemExit(f"{f}: expected one --eval spec, scannet_scene0451_01, not {d['eval']}")
+        if control is not None and d["control"] != control:
+            raise SystemExit(f"{f}: its geometric reference differs from the other files'")
+        control = d["control"]
         for path, rows in d["models"].items():
             parts = Path(path).parts  # .../probe/GENERATOR/seed_K/model.pt
             gen, seed = parts[-3], int(parts[-2].removeprefix("seed_"))
+            if gen not in NAMES:
+                raise SystemExit(f"{f}: {path}: generator {gen!r} is not one of {list(NAMES)}")
             for part in ("learned", "hybrid"):
-                per.setdefault((gen, part), {})[seed] = rows[part][0]["AP50"]  # the first (only) --eval spec
+                seeds = per.setdefault((gen, part), {})
+                if seed in seeds:
+                    raise SystemExit(f"{f}: {gen} seed {seed} is also in another file")
+                seeds[seed] = rows[part][0]["AP50"]  # the first (only) --eval spec
     print("\nscene0451_01 (one scan, not in the dev set), AP50; geometric reference "
           f"{control['geometric'][0]['AP50']:.3f}:\n")
     print("| training data | inference | seeds | AP50 mean ± std | AP50 per seed |")
     print("|---|---|---:|---:|---|")
+    stats: dict = {}
     for part in ("learned", "hybrid"):
         for g in NAMES:
             if (g, part) not in per:
                 continue
-            v = np.array([per[(g, part)][k] for k in sorted(per[(g, part)])])
+            seeds = sorted(per[(g, part)])
+            v = np.array([per[(g, part)][k] for k in seeds])
             sd = v.std(ddof=1) if len(v) > 1 else float("nan")
+            stats[(g, part)] = (v, sd, seeds)
             print(f"| {NAMES[g]} | {part} | {len(v)} | {v.mean():.3f} ± {sd:.3f} | "
                   + " / ".join(f"{x:.3f}" for x in v) + " |")
-
+    print()
+    target_lines(stats)
 
 if __name__ == "__main__":
     main()
