@@ -6,7 +6,7 @@
 Only seeds 0..K-1 are used (default 3, the published verdict of the plan; ``--seeds 6`` for the
 verdict at six seeds that the plan's amendment fixed in advance).
 
-Then, from scene0451_01-*.json (``scripts/hybrid_eval.py`` over the same models with
+Then, from hybrid-eval-s0451-*.json (metrics only) (``scripts/hybrid_eval.py`` over the same models with
 ``--eval array:../shared/data/real/scannet_scene0451_01.npy``), the same models on that scan.
 """
 
@@ -92,7 +92,7 @@ def target_lines(stats: dict) -> None:
 
 def scene0451() -> None:
     """AP50 on scene0451_01 per generator (learned and hybrid rows of hybrid_eval.py), seeds in order."""
-    files = sorted(HERE.glob("scene0451_01-*.json"))
+    files = sorted(HERE.glob("hybrid-eval-s0451-*.json"))
     if not files:
         return
     per: dict[tuple[str, str], dict[int, float]] = {}
