@@ -28,22 +28,19 @@ NAMES = {"assist3d": "ASSIST-3D", "randomrooms": "RandomRooms-style", "mesh-samp
          "holodeck-style": "Holodeck-style", "no-context": "no-context"}
 
 
-SEEDS = 3  # seeds 0..SEEDS-1 are used; --seeds sets it
-
-
-def runs(gen: str, part: str) -> list[dict]:
+def runs(gen: str, part: str, max_seeds: int) -> list[dict]:
     out = []
-    files = sorted(HERE.glob(f"per_seed/{gen}-seed*.json"), key=lambda f: int(f.stem.rsplit("seed", 1)[1]))
-    files = [f for f in files if int(f.stem.rsplit("seed", 1)[1]) < SEEDS]
+    numbered = ((int(f.stem.rsplit("seed", 1)[1]), f) for f in HERE.glob(f"per_seed/{gen}-seed*.json"))
+    files = [f for k, f in sorted(numbered) if k < max_seeds]
     for f in files:
         r = json.loads(f.read_text())
         out.append(r if part == "learned" else r["hybrid"])
     return out
 
 
-def main() -> None:
+def main(max_seeds: int = 3) -> None:
     gens = [g for g in NAMES if list(HERE.glob(f"per_seed/{g}-seed*.json"))]
-    rooms = sorted({room_of(sid) for g in gens for r in runs(g, "learned") for sid in r["per_scene"]})
+    rooms = sorted({room_of(sid) for g in gens for r in runs(g, "learned", max_seeds) for sid in r["per_scene"]})
     print("AP50 per seed is pooled over the 10 scans; the room columns are means of per-scan AP50 (over the "
           "room's scans and the seeds), so they do not average to it.\n")
     print("| training data | inference | seeds | AP50 mean ± std | AP50 per seed | AP25 mean | "
@@ -52,7 +49,7 @@ def main() -> None:
     stats: dict = {}
     for part in ("learned", "hybrid"):
         for g in gens:
-            rs = runs(g, part)
+            rs = runs(g, part, max_seeds)
             a50 = np.array([r["AP50"] for r in rs])
             seeds = [r["seed"] for r in rs]
             row = row_from_runs(NAMES[g], rs)
@@ -63,7 +60,7 @@ def main() -> None:
                   + " | ".join(f"{row['rooms'][k]:.3f}" for k in rooms) + " |")
     print()
     target_lines(stats)
-    scene0451()
+    scene0451(max_seeds)
 
 
 def target_lines(stats: dict) -> None:
@@ -90,7 +87,7 @@ def target_lines(stats: dict) -> None:
                   f"paired seeds, seeds {len(a)}/{len(b)}: target {verdict}")
 
 
-def scene0451() -> None:
+def scene0451(max_seeds: int) -> None:
     """AP50 on scene0451_01 per generator (learned and hybrid rows of hybrid_eval.py), seeds in order."""
     files = sorted(HERE.glob("hybrid-eval-s0451-*.json"))
     if not files:
@@ -109,7 +106,7 @@ def scene0451() -> None:
             gen, seed = parts[-3], int(parts[-2].removeprefix("seed_"))
             if gen not in NAMES:
                 raise SystemExit(f"{f}: {path}: generator {gen!r} is not one of {list(NAMES)}")
-            if seed >= SEEDS:
+            if seed >= max_seeds:
                 continue
             for part in ("learned", "hybrid"):
                 seeds = per.setdefault((gen, part), {})
@@ -137,5 +134,4 @@ def scene0451() -> None:
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seeds", type=int, default=3, help="use seeds 0..K-1 (default 3)")
-    SEEDS = ap.parse_args().seeds
-    main()
+    main(ap.parse_args().seeds)
