@@ -8,11 +8,13 @@ paths, run when a GPU is at hand (docs/model.md, "CUDA check"):
   unsupported to reach that branch) and in fp32; the loss must fall and stay finite;
   ``train()`` to a checkpoint on CUDA, resumed for one more epoch; ``predict_scene`` on CUDA against the CPU
   with the same weights; ``run_model_bench`` on CUDA (forward, forward+backward, peak memory).
+  After 150 fp32 training steps (so that masks exist) ``predict_scene`` and the final mask logits on
+  CUDA against the CPU; the fp16 gradient scaler saved in a checkpoint, read back and restored.
 - CPU segmenter: the shipped model's per-voxel outputs on a real scan on the CPU and on CUDA,
   ``segment_hybrid`` on both (instances, AP50 against the scan's labels, seconds), and training
   steps on CUDA (the loss must fall).
 
-    python scripts/cuda_check.py --scan SCAN.npy --out report.json [--steps 60]
+    python scripts/cuda_check.py --scan SCAN.npy --out report.json [--steps 60] [--only SECTION ...]
 
 Every section runs even when another fails; a failure is recorded with its traceback.
 """
@@ -131,6 +133,83 @@ def mask3d_train_resume_predict(tmp: Path) -> dict:
                              and agree is not None and agree > 0.99))}
 
 
+def mask3d_predict_parity(steps: int) -> dict:
+    """The same trained weights on the CPU and on CUDA: final mask logits and ``predict_scene``'s masks.
+
+    Trained in fp32 on CUDA for ``steps`` steps first, so that the model predicts masks at all (after a few
+    steps every logit is negative and ``predict_scene`` returns nothing to compare).
+    """
+    from assist3d.learn.engine.predict import predict_scene
+    from assist3d.learn.engine.train import build_model
+    from assist3d.learn.engine.voxelize import collate, voxelize
+
+    scenes = _toy(4)
+    cfg = parse_train_config(_cfg(amp=False))
+    tr = Trainer(cfg, MemorySource(scenes), steps_total=steps, device=DEV)
+    rng = np.random.default_rng(0)
+    for s in range(steps):
+        idx = [int(i) for i in rng.choice(len(scenes), 2, replace=False)]
+        tr.step(idx, rng=np.random.default_rng(s))
+    state = {k: v.detach().cpu().clone() for k, v in tr.model.state_dict().items()}
+    logits, preds = {}, {}
+    for dev in ("cpu", DEV):
+        m = build_model(cfg.model)
+        m.load_state_dict(state)
+        m.to(dev).eval()
+        with torch.no_grad():
+            vox = voxelize(scenes[0].coord, scenes[0].color, None, cfg.data.voxel_size)
+            coords, feats = collate([vox], dev)
+            logits[dev] = m(coords, feats, 1)[0][-1].masks.float().cpu().numpy()
+            preds[dev] = predict_scene(m, scenes[0], cfg.data.voxel_size, cfg.predict, device=dev)
+    a, b = preds["cpu"], preds[DEV]
+    diff = float(np.abs(logits["cpu"] - logits[DEV]).max())
+    scale = float(np.abs(logits["cpu"]).max())
+    n = min(len(a.scores), len(b.scores))
+    agree = float((a.masks[:n] == b.masks[:n]).mean()) if n else None
+    return {"steps": steps, "logit_max_abs_diff": diff, "logit_max_abs": scale,
+            "masks_cpu": int(len(a.scores)), "masks_cuda": int(len(b.scores)), "mask_point_agreement": agree,
+            "max_score_diff": float(np.abs(a.scores[:n] - b.scores[:n]).max()) if n else None,
+            # no mask shows nothing about predict_scene's agreement: ok is then None, not True
+            "ok": (None if n == 0 else bool(len(a.scores) == len(b.scores) and agree > 0.99
+                                            and diff <= 1e-2 * max(1.0, scale)))}
+
+
+def mask3d_fp16_scaler_resume(tmp: Path) -> dict:
+    """fp16 with the gradient scaler: its state saved in a checkpoint, read back with ``weights_only`` and restored."""
+    from assist3d.learn.engine.train import load_checkpoint, save_checkpoint
+
+    scenes = _toy(4)
+    cfg = parse_train_config(_cfg(amp=True))
+
+    def trainer() -> Trainer:
+        real = torch.cuda.is_bf16_supported
+        if DEV == "cuda":
+            torch.cuda.is_bf16_supported = lambda *a, **k: False  # reach the fp16 + GradScaler branch
+        try:
+            return Trainer(cfg, MemorySource(scenes), steps_total=20, device=DEV)
+        finally:
+            torch.cuda.is_bf16_supported = real
+
+    tr = trainer()
+    if tr.scaler is None:
+        return {"ok": None, "reason": f"no gradient scaler on {DEV} (fp16 AMP is CUDA-only)"}
+    for s in range(5):
+        tr.step([s % 4, (s + 1) % 4], rng=np.random.default_rng(s))
+    saved = tr.scaler.state_dict()
+    path = tmp / "fp16.pt"
+    tmp.mkdir(parents=True, exist_ok=True)
+    save_checkpoint(path, tr.model, tr.optimizer, tr.scheduler, 1, 5, cfg, tr.scaler)
+    state = load_checkpoint(path, map_location=DEV)
+    tr2 = trainer()
+    tr2.restore(state)
+    restored = tr2.scaler.state_dict()
+    st = tr2.step([0, 1], rng=np.random.default_rng(5))
+    same = {k: restored.get(k) == v for k, v in saved.items()}
+    return {"saved": {k: float(v) for k, v in saved.items()}, "restored": {k: float(v) for k, v in restored.items()},
+            "fresh_scale": float(trainer().scaler.get_scale()), "loss_after_resume": float(st.loss),
+            "ok": bool(all(same.values()) and np.isfinite(st.loss))}
+
+
 def mask3d_bench() -> dict:
     from assist3d.learn.engine.bench import run_model_bench
     from assist3d.learn.engine.config import TrainConfig
@@ -203,6 +282,9 @@ def main() -> None:
     ap.add_argument("--tmp", type=Path, default=None, help="scratch folder (default: a new temporary one; "
                     "an old one would let training resume from an earlier run)")
     ap.add_argument("--device", default="cuda", help="cuda (the check) or cpu (a dry run of the script)")
+    ap.add_argument("--only", nargs="+", default=None, metavar="SECTION", help="run only these sections")
+    ap.add_argument("--predict-steps", type=int, default=150,
+                    help="fp32 training steps before the predict_scene comparison")
     a = ap.parse_args()
     global DEV
     DEV = a.device
@@ -217,7 +299,14 @@ def main() -> None:
                 ("mask3d_train_resume_predict", lambda: mask3d_train_resume_predict(a.tmp)),
                 ("mask3d_bench", mask3d_bench),
                 ("segmenter_shipped", lambda: segmenter_shipped(a.scan)),
-                ("segmenter_training", lambda: segmenter_training(a.tmp, a.steps))]
+                ("segmenter_training", lambda: segmenter_training(a.tmp, a.steps)),
+                ("mask3d_predict_parity", lambda: mask3d_predict_parity(a.predict_steps)),
+                ("mask3d_fp16_scaler_resume", lambda: mask3d_fp16_scaler_resume(a.tmp))]
+    if a.only:
+        unknown = sorted(set(a.only) - {n for n, _ in sections})
+        if unknown:
+            raise SystemExit(f"--only: unknown section(s) {', '.join(unknown)}; known: {', '.join(n for n, _ in sections)}")
+        sections = [(n, f) for n, f in sections if n in a.only]
     for name, fn in sections:
         t0 = time.perf_counter()
         try:
