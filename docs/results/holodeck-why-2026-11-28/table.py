@@ -1,0 +1,103 @@
+"""Table and reading of the household-vocabulary run (plan.md beside this file).
+
+    python docs/results/holodeck-why-2026-11-28/table.py
+
+Rows: ASSIST-3D with the household classes (per_seed/assist3d-household-seedK.json here, each a probe
+seed's result.json), ASSIST-3D seeds 0-5 and Holodeck-style seeds 0-2 of the generator comparison with
+today's defaults (../fidelity-ema-2026-11-27/per_seed/). Then the plan's reading, fixed before the runs,
+and the household models on scene0451_01 (hybrid-eval-s0451-*.json here, metrics only).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from assist3d.bench.evaluation.compare import room_of
+
+HERE = Path(__file__).resolve().parent
+EMA = HERE.parent / "fidelity-ema-2026-11-27" / "per_seed"
+sys.path.insert(0, str(HERE.parents[2] / "scripts"))
+from fidelity_table import row_from_runs  # noqa: E402  (the per-room and mean/std rows of fidelity.sh's table)
+
+ROWS = [("ASSIST-3D, household classes", HERE / "per_seed", "assist3d-household", 3),
+        ("ASSIST-3D", EMA, "assist3d", 6),
+        ("Holodeck-style", EMA, "holodeck-style", 3)]
+
+
+def runs(folder: Path, gen: str, max_seeds: int, part: str) -> list[dict]:
+    numbered = sorted((int(f.stem.rsplit("seed", 1)[1]), f) for f in folder.glob(f"{gen}-seed*.json"))
+    out = []
+    for k, f in numbered:
+        if k >= max_seeds:
+            continue
+        r = json.loads(f.read_text())
+        out.append(r if part == "learned" else r["hybrid"])
+    return out
+
+
+def main() -> None:
+    table: dict = {}
+    for name, folder, gen, k in ROWS:
+        for part in ("learned", "hybrid"):
+            rs = runs(folder, gen, k, part)
+            if rs:
+                table[(name, part)] = (rs, row_from_runs(name, rs))
+    rooms = sorted({room_of(s) for rs, _ in table.values() for r in rs for s in r["per_scene"]})
+    print("| training data | inference | seeds | AP50 mean ± std | AP50 per seed | AP25 mean | "
+          + " | ".join(f"AP50 {r}" for r in rooms) + " |")
+    print("|---|---|---:|---:|---|---:|" + "---:|" * len(rooms))
+    for part in ("learned", "hybrid"):
+        for name, *_ in ROWS:
+            if (name, part) not in table:
+                continue
+            rs, row = table[(name, part)]
+            sd = row["AP50"][1] if len(rs) > 1 else float("nan")
+            print(f"| {name} | {part} | {len(rs)} | {row['AP50'][0]:.3f} ± {sd:.3f} | "
+                  + " / ".join(f"{r['AP50']:.3f}" for r in rs) + f" | {row['AP25'][0]:.3f} | "
+                  + " | ".join(f"{row['rooms'][k]:.3f}" for k in rooms) + " |")
+    arm, base = ("ASSIST-3D, household classes", "learned"), ("ASSIST-3D", "learned")
+    if arm in table and base in table:
+        (ra, rowa), (rb, rowb) = table[arm], table[base]
+        gap = rowa["AP50"][0] - rowb["AP50"][0]
+        sd = rowb["AP50"][1]
+        r9a, r9b = rowa["rooms"].get("scene0009"), rowb["rooms"].get("scene0009")
+        if len(ra) < 3:
+            reading = "pending (fewer than 3 seeds)"
+        elif gap > sd and r9a is not None and r9a > r9b:
+            reading = "the vocabulary carries Holodeck-style's learned lead"
+        elif abs(gap) <= sd:
+            reading = "it does not (within one ASSIST-3D standard deviation)"
+        else:
+            reading = "neither: reported as it is"
+        print(f"\nreading (plan.md): learned dev AP50 gap {gap:+.3f} against ASSIST-3D's std {sd:.3f} over "
+              f"{len(rb)} seeds; scene0009 {r9a:.3f} vs {r9b:.3f}; seeds {len(ra)}: {reading}")
+    s0451()
+
+
+def s0451() -> None:
+    files = sorted(HERE.glob("hybrid-eval-s0451-*.json"))
+    per: dict[str, dict[int, float]] = {}
+    for f in files:
+        d = json.loads(f.read_text())
+        if len(d["eval"]) != 1 or "scene0451_01" not in d["eval"][0]:
+            raise SystemExit(f"{f}: expected one --eval spec, scannet_scene0451_01, not {d['eval']}")
+        for path, rows in d["models"].items():
+            seed = int(Path(path).parts[-2].removeprefix("seed_"))
+            for part in ("learned", "hybrid"):
+                per.setdefault(part, {})[seed] = rows[part][0]["AP50"]
+        geo = d["control"]["geometric"][0]["AP50"]
+    if not per:
+        return
+    print(f"\nscene0451_01, AP50 of the household models (geometric reference {geo:.3f}):")
+    for part, seeds in per.items():
+        v = np.array([seeds[k] for k in sorted(seeds)])
+        sd = v.std(ddof=1) if len(v) > 1 else float("nan")
+        print(f"  {part}: {v.mean():.3f} ± {sd:.3f} (" + " / ".join(f"{x:.3f}" for x in v) + ")")
+
+
+if __name__ == "__main__":
+    main()
