@@ -170,7 +170,7 @@ def mask3d_predict_parity(steps: int) -> dict:
             "masks_cpu": int(len(a.scores)), "masks_cuda": int(len(b.scores)), "mask_point_agreement": agree,
             "max_score_diff": float(np.abs(a.scores[:n] - b.scores[:n]).max()) if n else None,
             # no mask shows nothing about predict_scene's agreement: ok is then None, not True
-            "ok": (None if n == 0 else bool(len(a.scores) == len(b.scores) and agree > 0.99
+            "ok": (None if len(a.scores) == len(b.scores) == 0 else bool(len(a.scores) == len(b.scores) and agree is not None and agree > 0.99
                                             and diff <= 1e-2 * max(1.0, scale)))}
 
 
