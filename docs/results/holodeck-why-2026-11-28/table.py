@@ -47,6 +47,8 @@ def main() -> None:
             if rs:
                 table[(name, part)] = (rs, row_from_runs(name, rs))
     rooms = sorted({room_of(s) for rs, _ in table.values() for r in rs for s in r["per_scene"]})
+    print("AP50 per seed is pooled over the 10 scans; the room columns are means of per-scan AP50 (over the "
+          "room's scans and the seeds), so they do not average to it.\n")
     print("| training data | inference | seeds | AP50 mean ± std | AP50 per seed | AP25 mean | "
           + " | ".join(f"AP50 {r}" for r in rooms) + " |")
     print("|---|---|---:|---:|---|---:|" + "---:|" * len(rooms))
@@ -65,8 +67,10 @@ def main() -> None:
         gap = rowa["AP50"][0] - rowb["AP50"][0]
         sd = rowb["AP50"][1]
         r9a, r9b = rowa["rooms"].get("scene0009"), rowb["rooms"].get("scene0009")
-        if len(ra) < 3:
-            reading = "pending (fewer than 3 seeds)"
+        if len(ra) < 3 or len(rb) < 6:
+            reading = "pending (the plan reads 3 seeds of the arm against 6 of ASSIST-3D)"
+        elif r9a is None or r9b is None:
+            raise SystemExit("scene0009 is missing from the per-scan results: the plan's reading needs it")
         elif gap > sd and r9a is not None and r9a > r9b:
             reading = "the vocabulary carries Holodeck-style's learned lead"
         elif abs(gap) <= sd:
@@ -74,22 +78,34 @@ def main() -> None:
         else:
             reading = "neither: reported as it is"
         print(f"\nreading (plan.md): learned dev AP50 gap {gap:+.3f} against ASSIST-3D's std {sd:.3f} over "
-              f"{len(rb)} seeds; scene0009 {r9a:.3f} vs {r9b:.3f}; seeds {len(ra)}: {reading}")
+              f"{len(rb)} seeds; scene0009 {r9a if r9a is not None else float('nan'):.3f} vs "
+              f"{r9b if r9b is not None else float('nan'):.3f}; seeds {len(ra)}: {reading}")
     s0451()
 
 
 def s0451() -> None:
     files = sorted(HERE.glob("hybrid-eval-s0451-*.json"))
     per: dict[str, dict[int, float]] = {}
+    geo = None
     for f in files:
         d = json.loads(f.read_text())
         if len(d["eval"]) != 1 or "scene0451_01" not in d["eval"][0]:
             raise SystemExit(f"{f}: expected one --eval spec, scannet_scene0451_01, not {d['eval']}")
+        g = d["control"]["geometric"][0]["AP50"]
+        if geo is not None and g != geo:
+            raise SystemExit(f"{f}: its geometric reference differs from the other files'")
+        geo = g
         for path, rows in d["models"].items():
-            seed = int(Path(path).parts[-2].removeprefix("seed_"))
+            parts = Path(path).parts  # .../probe/assist3d-household/seed_K/model.pt
+            if parts[-3] != "assist3d-household":
+                raise SystemExit(f"{f}: {path} is not a model of the household run")
+            seed = int(parts[-2].removeprefix("seed_"))
+            if seed >= 3:
+                continue
             for part in ("learned", "hybrid"):
+                if seed in per.get(part, {}):
+                    raise SystemExit(f"{f}: seed {seed} is also in another file")
                 per.setdefault(part, {})[seed] = rows[part][0]["AP50"]
-        geo = d["control"]["geometric"][0]["AP50"]
     if not per:
         return
     print(f"\nscene0451_01, AP50 of the household models (geometric reference {geo:.3f}):")
