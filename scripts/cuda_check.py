@@ -57,6 +57,17 @@ def _sync() -> None:
         torch.cuda.synchronize()
 
 
+def _trainer(cfg, scenes: list, steps: int, *, fp16: bool = False) -> Trainer:
+    """A Trainer on DEV; ``fp16`` reports bf16 as unsupported on CUDA to reach the fp16 + GradScaler branch."""
+    real = torch.cuda.is_bf16_supported
+    if fp16 and DEV == "cuda":
+        torch.cuda.is_bf16_supported = lambda *a, **k: False
+    try:
+        return Trainer(cfg, MemorySource(scenes), steps_total=steps, device=DEV)
+    finally:
+        torch.cuda.is_bf16_supported = real
+
+
 def mask3d_first_loss_parity() -> dict:
     cfg = parse_train_config(_cfg())
     scenes = _toy(2)
@@ -77,13 +88,7 @@ def mask3d_amp_training(steps: int) -> dict:
     res = {}
     for mode in ("bf16", "fp16", "fp32"):
         cfg = parse_train_config(_cfg(amp=mode != "fp32"))
-        real = torch.cuda.is_bf16_supported
-        if mode == "fp16" and DEV == "cuda":
-            torch.cuda.is_bf16_supported = lambda *a, **k: False  # reach the fp16 + GradScaler branch
-        try:
-            tr = Trainer(cfg, MemorySource(scenes), steps_total=steps, device=DEV)
-        finally:
-            torch.cuda.is_bf16_supported = real
+        tr = _trainer(cfg, scenes, steps, fp16=mode == "fp16")
         rng = np.random.default_rng(0)
         losses = []
         _sync()
@@ -180,17 +185,7 @@ def mask3d_fp16_scaler_resume(tmp: Path) -> dict:
 
     scenes = _toy(4)
     cfg = parse_train_config(_cfg(amp=True))
-
-    def trainer() -> Trainer:
-        real = torch.cuda.is_bf16_supported
-        if DEV == "cuda":
-            torch.cuda.is_bf16_supported = lambda *a, **k: False  # reach the fp16 + GradScaler branch
-        try:
-            return Trainer(cfg, MemorySource(scenes), steps_total=20, device=DEV)
-        finally:
-            torch.cuda.is_bf16_supported = real
-
-    tr = trainer()
+    tr = _trainer(cfg, scenes, 20, fp16=True)
     if tr.scaler is None:
         return {"ok": None, "reason": f"no gradient scaler on {DEV} (fp16 AMP is CUDA-only)"}
     for s in range(5):
@@ -200,13 +195,14 @@ def mask3d_fp16_scaler_resume(tmp: Path) -> dict:
     tmp.mkdir(parents=True, exist_ok=True)
     save_checkpoint(path, tr.model, tr.optimizer, tr.scheduler, 1, 5, cfg, tr.scaler)
     state = load_checkpoint(path, map_location=DEV)
-    tr2 = trainer()
+    tr2 = _trainer(cfg, scenes, 20, fp16=True)
+    fresh = float(tr2.scaler.get_scale())  # before the restore: what a scaler starts with
     tr2.restore(state)
     restored = tr2.scaler.state_dict()
     st = tr2.step([0, 1], rng=np.random.default_rng(5))
     same = {k: restored.get(k) == v for k, v in saved.items()}
     return {"saved": {k: float(v) for k, v in saved.items()}, "restored": {k: float(v) for k, v in restored.items()},
-            "fresh_scale": float(trainer().scaler.get_scale()), "loss_after_resume": float(st.loss),
+            "fresh_scale": fresh, "loss_after_resume": float(st.loss),
             "ok": bool(all(same.values()) and np.isfinite(st.loss))}
 
 
