@@ -546,6 +546,75 @@ def test_segment_a_ply_and_an_npy_and_refuse_bad_input(tmp_path):
         assert expect in str(r.exception) or expect in r.output, (name, str(r.exception), r.output)
 
 
+def test_every_up_axis_turns_to_z_by_a_proper_exact_rotation():
+    from assist3d.learn.segmenter.features import UP_AXES, to_segmenter_frame
+
+    pts = np.random.default_rng(0).normal(size=(50, 3)).astype(np.float32)
+    for up, rot in UP_AXES.items():
+        r = np.asarray(rot, np.float64)
+        axis = np.zeros(3)
+        axis["xyz".index(up[-1])] = -1.0 if up.startswith("-") else 1.0
+        assert np.array_equal(r @ axis, [0, 0, 1]) and round(np.linalg.det(r)) == 1, up  # up -> +z, no mirror
+        assert np.array_equal(to_segmenter_frame(pts, up), (pts.astype(np.float64) @ r.T).astype(np.float32)), up
+    for units, per_metre in (("cm", 100), ("mm", 1000)):
+        assert np.allclose(to_segmenter_frame(pts * per_metre, "y", units), to_segmenter_frame(pts, "y"), rtol=1e-6, atol=0)
+    with pytest.raises(ValueError, match="up axis 'w'"):
+        to_segmenter_frame(pts, "w")
+
+
+def test_segment_reads_y_up_and_millimetre_scans_with_the_frame_flags(tmp_path):
+    """A y-up export of a room (x, y, z) -> (x, z, -y) segmented with --up-axis y gives exactly the
+    z-up result, for the geometric reference and through the network (hybrid); its PLY keeps the
+    input's coordinates. A millimetre scan read as metres is refused with one line that names the
+    file and --units; with --units mm it is segmented. Unknown values are refused by name."""
+    from assist3d.bench.data.ply import read_ply
+
+    s = _room_with_boxes()
+    ckpt = _write_model(tmp_path / "m.pt")
+    yup = np.stack([s.coord[:, 0], s.coord[:, 2], -s.coord[:, 1]], 1).astype(np.float32)
+    np.save(tmp_path / "room.npy", s.coord)
+    np.save(tmp_path / "yup.npy", yup)
+    for method in ("geometric", "hybrid"):
+        extra = ["--checkpoint", str(ckpt)] if method == "hybrid" else []
+        outs = {}
+        for name, flags in (("room", []), ("yup", ["--up-axis", "y"])):
+            r = runner.invoke(app, ["segment", str(tmp_path / f"{name}.npy"), "--out", str(tmp_path / method),
+                                    "--method", method, *extra, *flags])
+            assert r.exit_code == 0, r.output
+            with np.load(tmp_path / method / f"{name}.npz") as z:
+                outs[name] = (z["masks"], z["scores"])
+        assert len(outs["room"][1]) >= 2, method
+        if method == "geometric":
+            outs_geo = outs["room"]
+        assert np.array_equal(outs["room"][0], outs["yup"][0]) and np.array_equal(outs["room"][1], outs["yup"][1]), method
+    assert np.allclose(read_ply(tmp_path / "geometric" / "yup.ply").xyz(), yup)
+    np.save(tmp_path / "mm.npy", s.coord * 1000)
+    r = runner.invoke(app, ["segment", str(tmp_path / "mm.npy"), "--out", str(tmp_path / "mm"), "--method", "geometric"])
+    assert r.exit_code != 0 and isinstance(r.exception, (DataError, SystemExit)), r.output
+    assert "mm.npy" in (str(r.exception) + r.output) and "--units" in (str(r.exception) + r.output)
+    r = runner.invoke(app, ["segment", str(tmp_path / "mm.npy"), "--out", str(tmp_path / "mm"), "--method", "geometric",
+                            "--units", "mm", "--json"])
+    assert r.exit_code == 0, r.output
+    with np.load(tmp_path / "mm" / "mm.npz") as z:  # the same instances, up to rounding at voxel borders
+        ref = outs_geo[0]
+        assert z["masks"].shape == ref.shape
+        assert (z["masks"] == ref).mean() > 0.999
+    for flag, value in (("--up-axis", "w"), ("--units", "ft")):
+        r = runner.invoke(app, ["segment", str(tmp_path / "room.npy"), "--out", str(tmp_path / "bad"), flag, value])
+        assert r.exit_code != 0 and flag in (str(r.exception) + r.output), (flag, r.output)
+
+
+def test_frame_hint_flags_scans_on_their_side_or_in_centimetres_only():
+    from assist3d.cli.segment import frame_hint
+
+    rng = np.random.default_rng(0)
+    room = rng.uniform([0, 0, 0], [6.0, 4.0, 2.7], (5000, 3))
+    assert frame_hint(room) is None
+    assert frame_hint(rng.uniform([0, 0, 0], [20.0, 15.0, 7.0], (5000, 3))) is None  # a tall hall, z up
+    assert "--up-axis" in frame_hint(room[:, [0, 2, 1]])  # y-up: 4 m "tall", 2.7 m wide
+    assert "--units" in frame_hint(room * 100)
+
+
 def test_segment_tta_flag_reaches_the_network_and_is_refused_without_one(tmp_path):
     """--tta changes the scores (the network's outputs are averaged over 8 copies), keeps the output
     contract, and the geometric reference, which has no network, refuses it."""

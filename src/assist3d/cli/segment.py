@@ -190,6 +190,24 @@ def usable_points(where: str, scene_id: str, coord: np.ndarray) -> np.ndarray:
     return ok
 
 
+def frame_hint(frame: np.ndarray) -> str | None:
+    """Why a scan, already in the segmenter's frame, may not be metres with z up, or None. Robust
+    extents (1st-99th percentile): an indoor scan taller along z than 3.5 m and than its shorter
+    horizontal side is more likely lying on its side (a y-up export); one wider than 200 m is more
+    likely in centimetres. A hint for a warning, never an error: atriums and halls exist."""
+    if len(frame) < 100:
+        return None
+    lo, hi = np.percentile(frame, [1.0, 99.0], axis=0)
+    ext = hi - lo
+    if ext.max() > 200.0:
+        return (f"it spans {ext.max():.0f} m along an axis, more than an indoor scan; "
+                f"if it is not in metres, give --units cm or --units mm")
+    if ext[2] > 3.5 and ext[2] > min(ext[0], ext[1]):
+        return (f"it is {ext[2]:.1f} m tall along z but {min(ext[0], ext[1]):.1f} m wide along "
+                f"{'xy'[int(np.argmin(ext[:2]))]}; if z is not its up axis, give --up-axis (e.g. y)")
+    return None
+
+
 def _inputs(spec: str):
     """Yield (scene_id, coord, color, sample-with-GT-or-None) for a file or a reader spec."""
     from ..bench.data import READERS, open_dataset
@@ -248,6 +266,10 @@ def segment_cmd(
     png: bool = typer.Option(False, "--png", help="also write <scene_id>.png, a top view coloured by instance"),
     as_json: bool = typer.Option(False, "--json", help="print one JSON line per scene (instances, seconds, AP when GT is known)"),
     threads: int = typer.Option(0, "--threads", min=0, max=256, help="torch CPU threads (0 = all cores)"),
+    up_axis: str = typer.Option("z", "--up-axis", help="the scan's up axis: z (ScanNet, ScanNet++, S3DIS), y (many "
+                                "mesh exports), -y, x, -x or -z; the scan is turned to z up for the model, the "
+                                "outputs keep its own coordinates"),
+    units: str = typer.Option("m", "--units", help="the scan's length unit: m, cm or mm"),
 ) -> None:
     """Segment object instances in a scan (class-agnostic), with no GPU and no download."""
     from ..bench.evaluation.ap import match_scene, summarize
@@ -262,6 +284,13 @@ def segment_cmd(
         raise ConfigError("--tta is for --method hybrid or learned; the geometric reference has no network to average")
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out {out}: exists and is not a folder")
+    from ..learn.engine.voxelize import VoxelGridError
+    from ..learn.segmenter.features import UNITS, UP_AXES, to_segmenter_frame
+
+    if up_axis not in UP_AXES:
+        raise ConfigError(f"--up-axis {up_axis!r}: expected one of {', '.join(UP_AXES)}")
+    if units not in UNITS:
+        raise ConfigError(f"--units {units!r}: expected one of {', '.join(UNITS)}")
     loaded = None
     if method != "geometric":
         _require_torch()
@@ -282,18 +311,25 @@ def segment_cmd(
             raise DataError(f"{input_}: scene {shown(scene_id)} has no points")
         finite = usable_points(input_, scene_id, coord)
         sub_color = color[finite] if color is not None else None
-        if loaded is not None and method == "hybrid":
-            from ..learn.segmenter.hybrid import segment_hybrid
+        frame = to_segmenter_frame(coord[finite], up_axis, units)  # what the model sees: metres, z up
+        hint = frame_hint(frame)
+        if hint:
+            log.warning("%s: scene %s: %s", shown(input_), shown(scene_id), hint)
+        try:
+            if loaded is not None and method == "hybrid":
+                from ..learn.segmenter.hybrid import segment_hybrid
 
-            seg = segment_hybrid(loaded.model, loaded.config, coord[finite], sub_color, tta=tta)
-        elif loaded is not None:
-            from ..learn.segmenter.infer import segment_points
+                seg = segment_hybrid(loaded.model, loaded.config, frame, sub_color, tta=tta)
+            elif loaded is not None:
+                from ..learn.segmenter.infer import segment_points
 
-            seg = segment_points(loaded.model, loaded.config, coord[finite], sub_color, tta=tta)
-        else:
-            from ..learn.segmenter.geometric import segment_geometric
+                seg = segment_points(loaded.model, loaded.config, frame, sub_color, tta=tta)
+            else:
+                from ..learn.segmenter.geometric import segment_geometric
 
-            seg = segment_geometric(coord[finite])
+                seg = segment_geometric(frame)
+        except VoxelGridError as e:  # a scan too large for the voxel grid, e.g. millimetres read as metres
+            raise DataError(f"{input_}: scene {shown(scene_id)}: {e}; read with --units {units}") from None
         masks = np.zeros((len(seg.scores), len(coord)), bool)
         masks[:, finite] = seg.masks
         labels = np.full(len(coord), -1, np.int64)
@@ -304,8 +340,8 @@ def segment_cmd(
         colors = instance_colors(labels)
         safe_coord = np.where(finite[:, None], coord, 0).astype(np.float32)
         write_ply(out / f"{scene_id}.ply", safe_coord, colors)
-        if png:
-            _png(out / f"{scene_id}.png", safe_coord[finite], colors[finite], f"{scene_id}: {len(seg.scores)} instances")
+        if png:  # a top view along the up axis, in metres
+            _png(out / f"{scene_id}.png", frame, colors[finite], f"{scene_id}: {len(seg.scores)} instances")
         row: dict = {"scene": scene_id, "points": len(coord), "instances": int(len(seg.scores)),
                      "seconds": round(seconds, 2), "npz": str(out / f"{scene_id}.npz")}
         if sample is not None and (sample.instance >= 0).any():

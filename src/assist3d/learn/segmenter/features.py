@@ -21,11 +21,45 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..engine.voxelize import majority_label
+from ..engine.voxelize import VoxelGridError, majority_label
 
 #: Channels of the geometry-only input, in order.
 GEOMETRY_CHANNELS: tuple[str, ...] = ("one", "height", "abs_nz", "linearity", "planarity", "scattering")
 COLOR_CHANNELS: tuple[str, ...] = ("r", "g", "b")
+
+
+#: Up axes a scan may come with, and the proper rotation (rows: the new x, y, z) that turns each to +z.
+#: Every rotation is a signed permutation, so converting is exact in floating point.
+UP_AXES: dict[str, tuple[tuple[int, int, int], ...]] = {
+    "z": ((1, 0, 0), (0, 1, 0), (0, 0, 1)),
+    "-z": ((1, 0, 0), (0, -1, 0), (0, 0, -1)),
+    "y": ((1, 0, 0), (0, 0, -1), (0, 1, 0)),
+    "-y": ((1, 0, 0), (0, 0, 1), (0, -1, 0)),
+    "x": ((0, 1, 0), (0, 0, 1), (1, 0, 0)),
+    "-x": ((0, -1, 0), (0, 0, 1), (-1, 0, 0)),
+}
+#: Length units a scan may come in, as metres per unit.
+UNITS: dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+
+
+def to_segmenter_frame(coord: np.ndarray, up: str = "z", units: str = "m") -> np.ndarray:
+    """(N, 3) float32 ``coord`` turned into the segmenter's frame: metres, z up (what its height and
+    ``|n_z|`` features, the floor estimate and the geometric reference's structural planes assume).
+    ``up`` is the scan's up axis (``UP_AXES``: many mesh exports are y-up), ``units`` its length unit
+    (``UNITS``). A proper rotation (no mirror), so instances keep their handedness; the default is
+    the identity and returns ``coord`` as float32."""
+    if up not in UP_AXES:
+        raise ValueError(f"up axis {up!r}: expected one of {', '.join(UP_AXES)}")
+    if units not in UNITS:
+        raise ValueError(f"units {units!r}: expected one of {', '.join(UNITS)}")
+    out = np.asarray(coord, np.float32)
+    if up != "z":
+        rot = np.asarray(UP_AXES[up])
+        # A signed permutation: pick and negate columns (no products with zeros, so inf stays inf).
+        out = out[:, np.abs(rot).argmax(1)] * rot.sum(1).astype(np.float32)
+    if units != "m":
+        out = (out.astype(np.float64) * UNITS[units]).astype(np.float32)
+    return out
 
 
 def num_channels(use_color: bool) -> int:
@@ -64,7 +98,7 @@ def voxelize(coord: np.ndarray, size: float, color: np.ndarray | None = None,
     origin = grid.min(0)
     grid -= origin
     if grid.max() >= 2 ** 15:
-        raise ValueError(f"the scene spans {grid.max() * size:.0f} m along an axis; at {size} m voxels the limit "
+        raise VoxelGridError(f"the scene spans {grid.max() * size:.0f} m along an axis; at {size} m voxels the limit "
                          f"is {2 ** 15 * size:.0f} m (is it in millimetres?)")
     keys = (grid[:, 0] << 32) | (grid[:, 1] << 16) | grid[:, 2]
     _, first, inverse, counts = np.unique(keys, return_index=True, return_inverse=True, return_counts=True)
