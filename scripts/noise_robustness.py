@@ -10,6 +10,8 @@ against the scan's own labels:
         [--denoise 0 1]  (denoise_points below: off and on)
 
     python scripts/noise_robustness.py --summarize noise-seed*.json   (mean ± std over the files' seeds)
+    python scripts/noise_robustness.py --sigma 0.001 --mask-change 0 1 2 --out change.json
+        (how far the masks move, apart from the metric: mask_change below)
 
 Rows per (sigma, denoise): ``geometric`` (no model), ``learned`` and ``hybrid`` (the shipped model
 unless --model); AP / AP50 / AP25 pooled over the scans of each --eval spec. The noise of scan i of
@@ -102,6 +104,66 @@ def summarize_files(paths: list[Path]) -> None:
               f"{ap25.mean():.3f} ± {sd(ap25)} | {','.join(str(s) for s, _, _ in sorted(cells[key]))} |")
 
 
+def mask_change(loaded, sets: list, specs: list[str], sigma: float, seeds: list[int], method: str = "hybrid") -> dict:
+    """How far the masks of ``method`` (hybrid, learned, geometric or superpoints: the superpoints as masks) move under noise, apart from the metric: per scan and draw, (a) each
+    ground-truth object's best IoU with any predicted mask (objects of >= 100 valid points), clean and
+    noisy, and how many cross IoU 0.5 either way; (b) each of the 20 highest-scored clean masks' best IoU
+    with a noisy mask; (c) the share of score-order changes among pairs of clean masks matched both ways."""
+    from assist3d.learn.segmenter.cluster import pairwise_iou
+    from assist3d.learn.segmenter.infer import Segmentation
+    from assist3d.learn.segmenter.superpoints import superpoints
+
+    def run(coord: np.ndarray, color: np.ndarray | None) -> Segmentation:
+        if method == "hybrid":
+            return segment_hybrid(loaded.model, loaded.config, coord, color)
+        if method == "learned":
+            return segment_points(loaded.model, loaded.config, coord, color)
+        if method == "geometric":
+            return segment_geometric(coord)
+        sp = superpoints(coord)  # superpoints as masks, the largest first
+        sizes = np.bincount(sp)
+        order = np.argsort(-sizes, kind="stable")
+        masks = sp[None, :] == order[:, None]
+        return Segmentation(masks=masks, scores=sizes[order].astype(np.float32), labels=sp)
+
+    gt_delta, crossings, objects, agree, swapped, pairs = [], 0, 0, [], 0, 0
+    for j, scans in enumerate(sets):
+        for i, s in enumerate(scans):
+            valid = s.valid if s.valid is not None else np.ones(len(s.coord), bool)
+            ids, counts = np.unique(s.instance[valid & (s.instance >= 0)], return_counts=True)
+            gt = np.stack([(s.instance == k) & valid for k in ids[counts >= 100]]) if (counts >= 100).any() else None
+            clean = run(s.coord, s.color)
+            for seed in seeds:
+                rng = np.random.default_rng([seed, j, i, round(sigma * 1e6)])
+                coord = (s.coord.astype(np.float64) + rng.normal(0.0, sigma, s.coord.shape)).astype(np.float32)
+                noisy = run(coord, s.color)
+                if gt is not None and len(clean.masks) and len(noisy.masks):
+                    a = pairwise_iou(gt, clean.masks).max(1)
+                    b = pairwise_iou(gt, noisy.masks).max(1)
+                    gt_delta.extend(np.abs(a - b).tolist())
+                    crossings += int(((a >= 0.5) != (b >= 0.5)).sum())
+                    objects += len(a)
+                top = clean.masks[:20]
+                if len(top) and len(noisy.masks):
+                    iou = pairwise_iou(top, noisy.masks)
+                    agree.extend(iou.max(1).tolist())
+                    match = iou.argmax(1)
+                    ok = iou.max(1) >= 0.8
+                    rank_clean = np.arange(len(top))[ok]
+                    rank_noisy = match[ok]
+                    for u in range(len(rank_clean)):
+                        for v in range(u + 1, len(rank_clean)):
+                            pairs += 1
+                            swapped += int(rank_noisy[u] > rank_noisy[v])
+    gt_delta_a, agree_a = np.array(gt_delta), np.array(agree)
+    return {"method": method, "sigma": sigma, "seeds": seeds, "objects": objects, "crossings_of_iou_0.5": crossings,
+            "gt_best_iou_abs_change": {"median": round(float(np.median(gt_delta_a)), 4),
+                                       "p90": round(float(np.percentile(gt_delta_a, 90)), 4)},
+            "top20_clean_mask_best_iou_with_noisy": {"median": round(float(np.median(agree_a)), 4),
+                                                     "share_below_0.8": round(float((agree_a < 0.8).mean()), 4)},
+            "score_order_swaps": {"pairs": pairs, "swapped": swapped}}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--sigma", type=float, nargs="+", default=[0.0, 0.0025, 0.005, 0.01])
@@ -112,6 +174,10 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--out", type=Path)
     ap.add_argument("--summarize", type=Path, nargs="+", help="print the table of these result files and exit")
+    ap.add_argument("--mask-change", type=int, nargs="+", metavar="SEED",
+                    help="instead of AP rows: how far the masks move at the first --sigma for these noise seeds")
+    ap.add_argument("--method", default="hybrid", choices=["hybrid", "learned", "geometric", "superpoints"],
+                    help="whose masks --mask-change follows")
     args = ap.parse_args()
     if args.summarize:
         summarize_files(args.summarize)
@@ -125,6 +191,11 @@ def main() -> None:
     model_path = args.model or shipped_model_path()
     loaded = load_segmenter(model_path)
     sets = [list(open_dataset(spec)) for spec in specs]
+    if args.mask_change:
+        out = mask_change(loaded, sets, specs, args.sigma[0], args.mask_change, args.method)
+        print(out)
+        write_json_atomic(args.out, {"model": str(model_path), "eval": specs, **out})
+        return
     rows = []
     for sigma in args.sigma:
         for dn in args.denoise:
