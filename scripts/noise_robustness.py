@@ -32,7 +32,7 @@ from assist3d.bench.data import open_dataset
 from assist3d.bench.evaluation.ap import match_scene, summarize
 from assist3d.core.fileio import write_json_atomic
 from assist3d.learn.segmenter.checkpoint import load_segmenter
-from assist3d.learn.segmenter.geometric import segment_geometric
+from assist3d.learn.segmenter.geometric import GeometricConfig, segment_geometric
 from assist3d.learn.segmenter.hybrid import segment_hybrid
 from assist3d.learn.segmenter.infer import segment_points
 from assist3d.learn.segmenter.shipped import shipped_model_path
@@ -104,7 +104,8 @@ def summarize_files(paths: list[Path]) -> None:
               f"{ap25.mean():.3f} ± {sd(ap25)} | {','.join(str(s) for s, _, _ in sorted(cells[key]))} |")
 
 
-def mask_change(loaded, sets: list, specs: list[str], sigma: float, seeds: list[int], method: str = "hybrid") -> dict:
+def mask_change(loaded, sets: list, specs: list[str], sigma: float, seeds: list[int], method: str = "hybrid",
+                geo: GeometricConfig = GeometricConfig()) -> dict:
     """How far the masks of ``method`` (hybrid, learned, geometric or superpoints: the superpoints as masks) move under noise, apart from the metric: per scan and draw, (a) each
     ground-truth object's best IoU with any predicted mask (objects of >= 100 valid points), clean and
     noisy, and how many cross IoU 0.5 either way; (b) each of the 20 highest-scored clean masks' best IoU
@@ -115,11 +116,11 @@ def mask_change(loaded, sets: list, specs: list[str], sigma: float, seeds: list[
 
     def run(coord: np.ndarray, color: np.ndarray | None) -> Segmentation:
         if method == "hybrid":
-            return segment_hybrid(loaded.model, loaded.config, coord, color)
+            return segment_hybrid(loaded.model, loaded.config, coord, color, geometric=geo)
         if method == "learned":
             return segment_points(loaded.model, loaded.config, coord, color)
         if method == "geometric":
-            return segment_geometric(coord)
+            return segment_geometric(coord, geo)
         sp = superpoints(coord)  # superpoints as masks, the largest first
         sizes = np.bincount(sp)
         order = np.argsort(-sizes, kind="stable")
@@ -156,7 +157,8 @@ def mask_change(loaded, sets: list, specs: list[str], sigma: float, seeds: list[
                             pairs += 1
                             swapped += int(rank_noisy[u] > rank_noisy[v])
     gt_delta_a, agree_a = np.array(gt_delta), np.array(agree)
-    return {"method": method, "sigma": sigma, "seeds": seeds, "objects": objects, "crossings_of_iou_0.5": crossings,
+    return {"method": method, "refine_planes": geo.refine, "sigma": sigma, "seeds": seeds, "objects": objects,
+            "crossings_of_iou_0.5": crossings,
             "gt_best_iou_abs_change": {"median": round(float(np.median(gt_delta_a)), 4),
                                        "p90": round(float(np.percentile(gt_delta_a, 90)), 4)},
             "top20_clean_mask_best_iou_with_noisy": {"median": round(float(np.median(agree_a)), 4),
@@ -176,6 +178,8 @@ def main() -> None:
     ap.add_argument("--summarize", type=Path, nargs="+", help="print the table of these result files and exit")
     ap.add_argument("--mask-change", type=int, nargs="+", metavar="SEED",
                     help="instead of AP rows: how far the masks move at the first --sigma for these noise seeds")
+    ap.add_argument("--refine-planes", type=int, default=0,
+                    help="GeometricConfig.refine for the geometric reference and hybrid inference (0 = default)")
     ap.add_argument("--method", default="hybrid", choices=["hybrid", "learned", "geometric", "superpoints"],
                     help="whose masks --mask-change follows")
     args = ap.parse_args()
@@ -191,8 +195,9 @@ def main() -> None:
     model_path = args.model or shipped_model_path()
     loaded = load_segmenter(model_path)
     sets = [list(open_dataset(spec)) for spec in specs]
+    geo = GeometricConfig(refine=args.refine_planes)
     if args.mask_change:
-        out = mask_change(loaded, sets, specs, args.sigma[0], args.mask_change, args.method)
+        out = mask_change(loaded, sets, specs, args.sigma[0], args.mask_change, args.method, geo)
         print(out)
         write_json_atomic(args.out, {"model": str(model_path), "eval": specs, **out})
         return
@@ -207,9 +212,9 @@ def main() -> None:
                     coord = (s.coord.astype(np.float64) + rng.normal(0.0, sigma, s.coord.shape)).astype(np.float32)
                     if dn:
                         coord = denoise_points(coord)
-                    segs = {"geometric": segment_geometric(coord),
+                    segs = {"geometric": segment_geometric(coord, geo),
                             "learned": segment_points(loaded.model, loaded.config, coord, s.color),
-                            "hybrid": segment_hybrid(loaded.model, loaded.config, coord, s.color)}
+                            "hybrid": segment_hybrid(loaded.model, loaded.config, coord, s.color, geometric=geo)}
                     for m, seg in segs.items():
                         matches[m][j].append(match_scene(s.instance, seg.masks, seg.scores, valid=s.valid,
                                                          scene_id=s.scene_id))
@@ -222,7 +227,8 @@ def main() -> None:
                 print(f"sigma {sigma:.4f} denoise {dn} {m:9s} "
                       + "  ".join(f"AP50 {row[spec]['AP50']:.3f}" for spec in specs), flush=True)
             print(f"  ({time.perf_counter() - t0:.0f} s)", flush=True)
-    write_json_atomic(args.out, {"model": str(model_path), "eval": specs, "seed": args.seed, "rows": rows})
+    write_json_atomic(args.out, {"model": str(model_path), "eval": specs, "seed": args.seed,
+                                 "refine_planes": args.refine_planes, "rows": rows})
 
 
 if __name__ == "__main__":

@@ -505,6 +505,26 @@ def test_geometric_reference_finds_boxes_on_a_floor_between_walls():
     assert seg.masks.shape[1] == len(s.coord) and (seg.masks.sum(0) <= 1).all()
 
 
+def test_refit_planes_follow_all_inliers_and_keep_the_reference_working():
+    """GeometricConfig.refine: the least-squares plane of a noisy tilted patch is its true plane (not
+    the tilt of three points), its normal keeps the RANSAC side; with refine the toy room's floor and
+    walls are still removed and its boxes found."""
+    from assist3d.learn.segmenter.geometric import GeometricConfig, _refit_plane
+
+    rng = np.random.default_rng(0)
+    true_n = np.array([0.0, np.sin(0.1), np.cos(0.1)])
+    u, v = np.array([1.0, 0, 0]), np.cross(true_n, [1.0, 0, 0])
+    p = rng.uniform(-2, 2, (5000, 1)) * u + rng.uniform(-2, 2, (5000, 1)) * v + 0.7 * true_n
+    p += rng.normal(0, 0.005, p.shape)
+    n, d = _refit_plane(p, -true_n)
+    assert np.dot(n, -true_n) > np.cos(np.radians(0.2)) and abs(d - 0.7) < 2e-3  # side of n_prev kept
+    s = _room_with_boxes()
+    for refine in (0, 2):
+        seg = segment_geometric(s.coord, GeometricConfig(refine=refine))
+        m = summarize([match_scene(s.instance, seg.masks, seg.scores, valid=s.valid)])
+        assert m["AP50"] > 0.7, (refine, m.summary)
+
+
 def _write_model(path: Path) -> Path:
     cfg = parse_segmenter_config(TINY_NET)
     torch.manual_seed(0)

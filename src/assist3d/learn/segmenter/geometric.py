@@ -27,6 +27,7 @@ class GeometricConfig:
     link_radius: float = 0.06  # connected components
     min_voxels: int = 30
     seed: int = 0
+    refine: int = 0  # least-squares refits of each RANSAC plane to its inliers (0 = the triplet's plane)
 
 
 WALL_BEHIND = 0.15
@@ -39,6 +40,15 @@ def _fit_plane(p: np.ndarray) -> tuple[np.ndarray, float] | None:
         return None
     n = n / norm
     return n, -float(n @ p[0])
+
+
+def _refit_plane(p: np.ndarray, n_prev: np.ndarray) -> tuple[np.ndarray, float]:
+    """The least-squares plane (PCA) of points ``p`` (K >= 3, 3), its normal on the side of ``n_prev``."""
+    c = p.mean(0)
+    n = np.linalg.eigh(np.cov((p - c).T))[1][:, 0]
+    if n @ n_prev < 0:
+        n = -n
+    return n, -float(n @ c)
 
 
 def _structural(n: np.ndarray, d: float, xyz: np.ndarray, inliers: np.ndarray, floor_z: float, top_z: float) -> bool:
@@ -82,6 +92,11 @@ def remove_planes(xyz: np.ndarray, cfg: GeometricConfig, rng: np.random.Generato
             break
         n, d = best
         inl = np.abs(pts @ n + d) < cfg.plane_distance
+        for _ in range(cfg.refine):  # the plane of all its inliers, not of the three points that won
+            n, d = _refit_plane(pts[inl], n)
+            inl = np.abs(pts @ n + d) < cfg.plane_distance
+            if inl.sum() < 3:
+                break
         if _structural(n, d, xyz, remaining[inl], floor_z, top_z):
             removed[remaining[inl]] = True
         else:

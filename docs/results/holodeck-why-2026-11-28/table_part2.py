@@ -1,0 +1,112 @@
+"""Table and reading of part 2 of the Holodeck-style question (plan-part2.md beside this file).
+
+    python docs/results/holodeck-why-2026-11-28/table_part2.py
+
+Rows: arm A (ASSIST-3D, household classes, sparser counts: per_seed/assist3d-household-sparse-seedK.json)
+against the household arm of part 1 (per_seed/assist3d-household-seedK.json); arm B (Holodeck-style with
+every model per class: per_seed/holodeck-allmodels-seedK.json) against Holodeck-style seeds 0-2 of the
+generator comparison (../fidelity-ema-2026-11-27/per_seed/). Each file is a probe seed's result.json.
+Then the plan's readings, fixed before the runs, and scene0451_01 (hybrid-eval-s0451-part2-*.json here).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from assist3d.bench.evaluation.compare import room_of
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from table import EMA, runs  # noqa: E402  (part 1's reader of per-seed files)
+
+sys.path.insert(0, str(HERE.parents[2] / "scripts"))
+from fidelity_table import row_from_runs  # noqa: E402
+
+ROWS = [("A: ASSIST-3D, household classes, sparser", HERE / "per_seed", "assist3d-household-sparse", 3),
+        ("ASSIST-3D, household classes (part 1)", HERE / "per_seed", "assist3d-household", 3),
+        ("B: Holodeck-style, every model per class", HERE / "per_seed", "holodeck-allmodels", 3),
+        ("Holodeck-style", EMA, "holodeck-style", 3)]
+# (arm, reference, reading when the arm is above by more than the reference's std [and scene0009 higher],
+#  reading when below by more, whether the scene0009 condition applies)
+READINGS = [("A: ASSIST-3D, household classes, sparser", "ASSIST-3D, household classes (part 1)",
+             "density adds to the vocabulary", None, True),
+            ("B: Holodeck-style, every model per class", "Holodeck-style",
+             None, "few models per class matter", False)]
+
+
+def main() -> None:
+    table: dict = {}
+    for name, folder, gen, k in ROWS:
+        for part in ("learned", "hybrid"):
+            rs = runs(folder, gen, k, part)
+            if rs:
+                table[(name, part)] = (rs, row_from_runs(name, rs))
+    rooms = sorted({room_of(s) for rs, _ in table.values() for r in rs for s in r["per_scene"]})
+    print("AP50 per seed is pooled over the 10 scans; the room columns are means of per-scan AP50 (over the "
+          "room's scans and the seeds), so they do not average to it.\n")
+    print("| training data | inference | seeds | AP50 mean ± std | AP50 per seed | AP25 mean | "
+          + " | ".join(f"AP50 {r}" for r in rooms) + " |")
+    print("|---|---|---:|---:|---|---:|" + "---:|" * len(rooms))
+    for part in ("learned", "hybrid"):
+        for name, *_ in ROWS:
+            if (name, part) not in table:
+                continue
+            rs, row = table[(name, part)]
+            sd = row["AP50"][1] if len(rs) > 1 else float("nan")
+            print(f"| {name} | {part} | {len(rs)} | {row['AP50'][0]:.3f} ± {sd:.3f} | "
+                  + " / ".join(f"{r['AP50']:.3f}" for r in rs) + f" | {row['AP25'][0]:.3f} | "
+                  + " | ".join(f"{row['rooms'][k]:.3f}" for k in rooms) + " |")
+    print()
+    for arm, ref, above, below, needs_0009 in READINGS:
+        if (arm, "learned") not in table or (ref, "learned") not in table:
+            print(f"reading {arm[:1]}: pending (no seed yet)")
+            continue
+        (ra, rowa), (rb, rowb) = table[(arm, "learned")], table[(ref, "learned")]
+        if len(ra) < 3 or len(rb) < 3:
+            print(f"reading {arm[:1]}: pending ({len(ra)} of 3 seeds; the plan reads all three)")
+            continue
+        gap, sd = rowa["AP50"][0] - rowb["AP50"][0], rowb["AP50"][1]
+        r9a, r9b = rowa["rooms"].get("scene0009"), rowb["rooms"].get("scene0009")
+        if needs_0009 and (r9a is None or r9b is None):
+            raise SystemExit("scene0009 is missing from the per-scan results: the plan's reading needs it")
+        if abs(gap) <= sd:
+            reading = "no effect that large (within one standard deviation of the reference)"
+        elif above and gap > sd and (not needs_0009 or r9a > r9b):
+            reading = above
+        elif below and gap < -sd:
+            reading = below
+        else:
+            reading = "neither: reported as it is"
+        extra = f"; scene0009 {r9a:.3f} vs {r9b:.3f}" if needs_0009 else ""
+        print(f"reading {arm[:1]} (plan-part2.md): learned dev AP50 {rowa['AP50'][0]:.3f} vs {rowb['AP50'][0]:.3f}, "
+              f"gap {gap:+.3f} against the reference's std {sd:.3f}{extra}: {reading}")
+    s0451()
+
+
+def s0451() -> None:
+    per: dict[tuple[str, str], dict[int, float]] = {}
+    for f in sorted(HERE.glob("hybrid-eval-s0451-part2-*.json")):
+        d = json.loads(f.read_text())
+        if len(d["eval"]) != 1 or "scene0451_01" not in d["eval"][0]:
+            raise SystemExit(f"{f}: expected one --eval spec, scannet_scene0451_01, not {d['eval']}")
+        for path, rows in d["models"].items():
+            parts = Path(path).parts  # .../probe/GEN/seed_K/model.pt
+            gen, seed = parts[-3], int(parts[-2].removeprefix("seed_"))
+            if gen not in ("assist3d-household-sparse", "holodeck-allmodels"):
+                raise SystemExit(f"{f}: {path} is not a model of part 2")
+            for part in ("learned", "hybrid"):
+                if seed in per.get((gen, part), {}):
+                    raise SystemExit(f"{f}: {gen} seed {seed} is also in another file")
+                per.setdefault((gen, part), {})[seed] = rows[part][0]["AP50"]
+    for (gen, part), seeds in sorted(per.items()):
+        v = np.array([seeds[k] for k in sorted(seeds)])
+        sd = v.std(ddof=1) if len(v) > 1 else float("nan")
+        print(f"scene0451_01 {gen} {part}: {v.mean():.3f} ± {sd:.3f} (" + " / ".join(f"{x:.3f}" for x in v) + ")")
+
+
+if __name__ == "__main__":
+    main()
