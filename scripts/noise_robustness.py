@@ -178,6 +178,8 @@ def main() -> None:
     ap.add_argument("--summarize", type=Path, nargs="+", help="print the table of these result files and exit")
     ap.add_argument("--mask-change", type=int, nargs="+", metavar="SEED",
                     help="instead of AP rows: how far the masks move at the first --sigma for these noise seeds")
+    ap.add_argument("--methods", nargs="+", default=["geometric", "learned", "hybrid"],
+                    choices=["geometric", "learned", "hybrid"], help="the AP rows to compute")
     ap.add_argument("--refine-planes", type=int, default=0,
                     help="GeometricConfig.refine for the geometric reference and hybrid inference (0 = default)")
     ap.add_argument("--method", default="hybrid", choices=["hybrid", "learned", "geometric", "superpoints"],
@@ -204,7 +206,7 @@ def main() -> None:
     rows = []
     for sigma in args.sigma:
         for dn in args.denoise:
-            matches: dict[str, list[list]] = {m: [[] for _ in specs] for m in ("geometric", "learned", "hybrid")}
+            matches: dict[str, list[list]] = {m: [[] for _ in specs] for m in args.methods}
             t0 = time.perf_counter()
             for j, scans in enumerate(sets):
                 for i, s in enumerate(scans):
@@ -212,9 +214,10 @@ def main() -> None:
                     coord = (s.coord.astype(np.float64) + rng.normal(0.0, sigma, s.coord.shape)).astype(np.float32)
                     if dn:
                         coord = denoise_points(coord)
-                    segs = {"geometric": segment_geometric(coord, geo),
-                            "learned": segment_points(loaded.model, loaded.config, coord, s.color),
-                            "hybrid": segment_hybrid(loaded.model, loaded.config, coord, s.color, geometric=geo)}
+                    run = {"geometric": lambda: segment_geometric(coord, geo),
+                           "learned": lambda: segment_points(loaded.model, loaded.config, coord, s.color),
+                           "hybrid": lambda: segment_hybrid(loaded.model, loaded.config, coord, s.color, geometric=geo)}
+                    segs = {m: run[m]() for m in args.methods}
                     for m, seg in segs.items():
                         matches[m][j].append(match_scene(s.instance, seg.masks, seg.scores, valid=s.valid,
                                                          scene_id=s.scene_id))
