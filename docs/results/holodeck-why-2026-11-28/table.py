@@ -39,9 +39,11 @@ def runs(folder: Path, gen: str, max_seeds: int, part: str) -> list[dict]:
     return out
 
 
-def main() -> None:
+def print_table(rows: list[tuple[str, Path, str, int]]) -> dict:
+    """Print the markdown table of ``rows`` ((name, folder, generator, seeds)); returns
+    ``{(name, "learned" | "hybrid"): (runs, row)}`` for the readings."""
     table: dict = {}
-    for name, folder, gen, k in ROWS:
+    for name, folder, gen, k in rows:
         for part in ("learned", "hybrid"):
             rs = runs(folder, gen, k, part)
             if rs:
@@ -53,7 +55,7 @@ def main() -> None:
           + " | ".join(f"AP50 {r}" for r in rooms) + " |")
     print("|---|---|---:|---:|---|---:|" + "---:|" * len(rooms))
     for part in ("learned", "hybrid"):
-        for name, *_ in ROWS:
+        for name, *_ in rows:
             if (name, part) not in table:
                 continue
             rs, row = table[(name, part)]
@@ -61,6 +63,11 @@ def main() -> None:
             print(f"| {name} | {part} | {len(rs)} | {row['AP50'][0]:.3f} ± {sd:.3f} | "
                   + " / ".join(f"{r['AP50']:.3f}" for r in rs) + f" | {row['AP25'][0]:.3f} | "
                   + " | ".join(f"{row['rooms'][k]:.3f}" for k in rooms) + " |")
+    return table
+
+
+def main() -> None:
+    table = print_table(ROWS)
     arm, base = ("ASSIST-3D, household classes", "learned"), ("ASSIST-3D", "learned")
     if arm in table and base in table:
         (ra, rowa), (rb, rowb) = table[arm], table[base]

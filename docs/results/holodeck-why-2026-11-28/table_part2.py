@@ -17,14 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from assist3d.bench.evaluation.compare import room_of
-
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from table import EMA, runs  # noqa: E402  (part 1's reader of per-seed files)
-
-sys.path.insert(0, str(HERE.parents[2] / "scripts"))
-from fidelity_table import row_from_runs  # noqa: E402
+from table import EMA, print_table  # noqa: E402  (part 1's reader and table of per-seed files)
 
 ROWS = [("A: ASSIST-3D, household classes, sparser", HERE / "per_seed", "assist3d-household-sparse", 3),
         ("ASSIST-3D, household classes (part 1)", HERE / "per_seed", "assist3d-household", 3),
@@ -39,27 +34,7 @@ READINGS = [("A: ASSIST-3D, household classes, sparser", "ASSIST-3D, household c
 
 
 def main() -> None:
-    table: dict = {}
-    for name, folder, gen, k in ROWS:
-        for part in ("learned", "hybrid"):
-            rs = runs(folder, gen, k, part)
-            if rs:
-                table[(name, part)] = (rs, row_from_runs(name, rs))
-    rooms = sorted({room_of(s) for rs, _ in table.values() for r in rs for s in r["per_scene"]})
-    print("AP50 per seed is pooled over the 10 scans; the room columns are means of per-scan AP50 (over the "
-          "room's scans and the seeds), so they do not average to it.\n")
-    print("| training data | inference | seeds | AP50 mean ± std | AP50 per seed | AP25 mean | "
-          + " | ".join(f"AP50 {r}" for r in rooms) + " |")
-    print("|---|---|---:|---:|---|---:|" + "---:|" * len(rooms))
-    for part in ("learned", "hybrid"):
-        for name, *_ in ROWS:
-            if (name, part) not in table:
-                continue
-            rs, row = table[(name, part)]
-            sd = row["AP50"][1] if len(rs) > 1 else float("nan")
-            print(f"| {name} | {part} | {len(rs)} | {row['AP50'][0]:.3f} ± {sd:.3f} | "
-                  + " / ".join(f"{r['AP50']:.3f}" for r in rs) + f" | {row['AP25'][0]:.3f} | "
-                  + " | ".join(f"{row['rooms'][k]:.3f}" for k in rooms) + " |")
+    table = print_table(ROWS)
     print()
     for arm, ref, above, below, needs_0009 in READINGS:
         if (arm, "learned") not in table or (ref, "learned") not in table:
