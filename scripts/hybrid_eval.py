@@ -6,8 +6,10 @@ components and the superpoints do not depend on the model and are computed once 
         [--eval array:../shared/data/real/dev --eval array:../shared/data/real/scannet_scene0451_01.npy]
         [--tta]
 
-Rows: ``geometric`` and ``geometric+snap`` (no model; the control), then per model ``learned``
-(what ``assist3d probe`` scores), ``hybrid`` (what ``assist3d segment`` does by default),
+Rows: ``geometric`` and ``geometric+snap`` (no model; the control: the reference, ``GeometricConfig()``,
+whose planes are not refit), then per model ``learned``
+(what ``assist3d probe`` scores), ``hybrid`` (what ``assist3d segment`` does by default, with
+``HYBRID_GEOMETRIC``'s plane refit since 2026-11-28; figures before that date were made without it),
 ``hybrid_v1`` (the first hybrid recipe, without the fallback proposals) and ``hybrid+stability``
 (the stability ranking, measured and not adopted; see ``learn/segmenter/hybrid.py``),
 ``hybrid+drop_structure`` and ``learned+drop_structure`` (the network's instances linked without the
@@ -38,7 +40,7 @@ from assist3d.core.fileio import write_json_atomic
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.features import voxel_features, voxelize
 from assist3d.learn.segmenter.geometric import segment_geometric, structural_points
-from assist3d.learn.segmenter.hybrid import HybridConfig, combine, structure_voxels, without_structure
+from assist3d.learn.segmenter.hybrid import HYBRID_GEOMETRIC, HybridConfig, combine, structure_voxels, without_structure
 from assist3d.learn.segmenter.infer import instances, predict_voxels, predict_voxels_tta
 from assist3d.learn.segmenter.superpoints import snap_masks, superpoints
 
@@ -70,13 +72,17 @@ def main() -> None:
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
     specs = a.eval or ["array:../shared/data/real/dev", "array:../shared/data/real/scannet_scene0451_01.npy"]
-    scans = []  # (group, scene_id, sample, geometric segmentation, superpoints, points on structural planes)
+    # (group, scene_id, sample, hybrid inference's geometric components, superpoints, points on its
+    # structural planes); the control rows score the reference itself (GeometricConfig(), no plane refit)
+    scans, reference = [], []
     for g, spec in enumerate(specs):
         ds = open_dataset(spec)
         for sid in ds.scene_ids:
             s = ds.load(sid)
-            on_plane = structural_points(s.coord)
-            scans.append((g, sid, s, segment_geometric(s.coord, on_plane=on_plane), superpoints(s.coord), on_plane))
+            on_plane = structural_points(s.coord, HYBRID_GEOMETRIC)
+            scans.append((g, sid, s, segment_geometric(s.coord, HYBRID_GEOMETRIC, on_plane), superpoints(s.coord),
+                          on_plane))
+            reference.append(segment_geometric(s.coord))
             print("prepared", sid, flush=True)
 
     def score(preds: list) -> list[dict]:
@@ -86,8 +92,9 @@ def main() -> None:
         return [_metrics(m) for m in groups]
 
     result: dict = {"eval": specs, "control": {}, "models": {}}
-    result["control"]["geometric"] = score([(geo.masks, geo.scores) for *_, geo, _, _ in scans])
-    result["control"]["geometric+snap"] = score([(snap_masks(geo.masks, segs), geo.scores) for *_, geo, segs, _ in scans])
+    result["control"]["geometric"] = score([(geo.masks, geo.scores) for geo in reference])
+    result["control"]["geometric+snap"] = score([(snap_masks(geo.masks, segs), geo.scores)
+                                                 for geo, (*_, segs, _) in zip(reference, scans)])
     for path in a.models:
         t0 = time.perf_counter()
         members = [load_segmenter(p) for p in path.split(",")]

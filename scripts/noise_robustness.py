@@ -13,6 +13,9 @@ against the scan's own labels:
     python scripts/noise_robustness.py --sigma 0.001 --mask-change 0 1 2 --out change.json
         (how far the masks move, apart from the metric: mask_change below)
 
+The figures of docs/fidelity.md "Noisy scans" before the plane refit was adopted for hybrid inference
+were made with ``--refine-planes 0`` (then the default); today's default refits hybrid inference's planes.
+
 Rows per (sigma, denoise): ``geometric`` (no model), ``learned`` and ``hybrid`` (the shipped model
 unless --model); AP / AP50 / AP25 pooled over the scans of each --eval spec. The noise of scan i of
 spec j comes from ``default_rng([seed, j, i, round(sigma * 1e6)])``, so every row sees the same noisy scans.
@@ -33,7 +36,7 @@ from assist3d.bench.evaluation.ap import match_scene, summarize
 from assist3d.core.fileio import write_json_atomic
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.geometric import GeometricConfig, segment_geometric
-from assist3d.learn.segmenter.hybrid import segment_hybrid
+from assist3d.learn.segmenter.hybrid import HYBRID_GEOMETRIC, segment_hybrid
 from assist3d.learn.segmenter.infer import segment_points
 from assist3d.learn.segmenter.shipped import shipped_model_path
 
@@ -105,7 +108,7 @@ def summarize_files(paths: list[Path]) -> None:
 
 
 def mask_change(loaded, sets: list, specs: list[str], sigma: float, seeds: list[int], method: str = "hybrid",
-                geo: GeometricConfig = GeometricConfig()) -> dict:
+                geo: GeometricConfig = GeometricConfig(), hyb_geo: GeometricConfig = HYBRID_GEOMETRIC) -> dict:
     """How far the masks of ``method`` (hybrid, learned, geometric or superpoints: the superpoints as masks) move under noise, apart from the metric: per scan and draw, (a) each
     ground-truth object's best IoU with any predicted mask (objects of >= 100 valid points), clean and
     noisy, and how many cross IoU 0.5 either way; (b) each of the 20 highest-scored clean masks' best IoU
@@ -116,7 +119,7 @@ def mask_change(loaded, sets: list, specs: list[str], sigma: float, seeds: list[
 
     def run(coord: np.ndarray, color: np.ndarray | None) -> Segmentation:
         if method == "hybrid":
-            return segment_hybrid(loaded.model, loaded.config, coord, color, geometric=geo)
+            return segment_hybrid(loaded.model, loaded.config, coord, color, geometric=hyb_geo)
         if method == "learned":
             return segment_points(loaded.model, loaded.config, coord, color)
         if method == "geometric":
@@ -157,7 +160,8 @@ def mask_change(loaded, sets: list, specs: list[str], sigma: float, seeds: list[
                             pairs += 1
                             swapped += int(rank_noisy[u] > rank_noisy[v])
     gt_delta_a, agree_a = np.array(gt_delta), np.array(agree)
-    return {"method": method, "refine_planes": geo.refine, "sigma": sigma, "seeds": seeds, "objects": objects,
+    return {"method": method, "refine_planes": (hyb_geo if method == "hybrid" else geo).refine, "sigma": sigma,
+            "seeds": seeds, "objects": objects,
             "crossings_of_iou_0.5": crossings,
             "gt_best_iou_abs_change": {"median": round(float(np.median(gt_delta_a)), 4),
                                        "p90": round(float(np.percentile(gt_delta_a, 90)), 4)},
@@ -180,8 +184,9 @@ def main() -> None:
                     help="instead of AP rows: how far the masks move at the first --sigma for these noise seeds")
     ap.add_argument("--methods", nargs="+", default=["geometric", "learned", "hybrid"],
                     choices=["geometric", "learned", "hybrid"], help="the AP rows to compute")
-    ap.add_argument("--refine-planes", type=int, default=0,
-                    help="GeometricConfig.refine for the geometric reference and hybrid inference (0 = default)")
+    ap.add_argument("--refine-planes", type=int, default=None,
+                    help="GeometricConfig.refine for both the geometric reference and hybrid inference (default: "
+                         "each its own, 0 for the reference and HYBRID_GEOMETRIC's for hybrid inference)")
     ap.add_argument("--method", default="hybrid", choices=["hybrid", "learned", "geometric", "superpoints"],
                     help="whose masks --mask-change follows")
     args = ap.parse_args()
@@ -197,9 +202,10 @@ def main() -> None:
     model_path = args.model or shipped_model_path()
     loaded = load_segmenter(model_path)
     sets = [list(open_dataset(spec)) for spec in specs]
-    geo = GeometricConfig(refine=args.refine_planes)
+    geo = GeometricConfig() if args.refine_planes is None else GeometricConfig(refine=args.refine_planes)
+    hyb_geo = HYBRID_GEOMETRIC if args.refine_planes is None else geo
     if args.mask_change:
-        out = mask_change(loaded, sets, specs, args.sigma[0], args.mask_change, args.method, geo)
+        out = mask_change(loaded, sets, specs, args.sigma[0], args.mask_change, args.method, geo, hyb_geo)
         print(out)
         write_json_atomic(args.out, {"model": str(model_path), "eval": specs, **out})
         return
@@ -216,7 +222,7 @@ def main() -> None:
                         coord = denoise_points(coord)
                     run = {"geometric": lambda: segment_geometric(coord, geo),
                            "learned": lambda: segment_points(loaded.model, loaded.config, coord, s.color),
-                           "hybrid": lambda: segment_hybrid(loaded.model, loaded.config, coord, s.color, geometric=geo)}
+                           "hybrid": lambda: segment_hybrid(loaded.model, loaded.config, coord, s.color, geometric=hyb_geo)}
                     segs = {m: run[m]() for m in args.methods}
                     for m, seg in segs.items():
                         matches[m][j].append(match_scene(s.instance, seg.masks, seg.scores, valid=s.valid,
@@ -231,7 +237,7 @@ def main() -> None:
                       + "  ".join(f"AP50 {row[spec]['AP50']:.3f}" for spec in specs), flush=True)
             print(f"  ({time.perf_counter() - t0:.0f} s)", flush=True)
     write_json_atomic(args.out, {"model": str(model_path), "eval": specs, "seed": args.seed,
-                                 "refine_planes": args.refine_planes, "rows": rows})
+                                 "refine_planes": {"geometric": geo.refine, "hybrid": hyb_geo.refine}, "rows": rows})
 
 
 if __name__ == "__main__":

@@ -493,6 +493,22 @@ def test_probe_hybrid_scores_segment_default_and_is_added_to_a_finished_folder(t
         [{k: v for k, v in r.items() if k != "predict_seconds"} for r in h["runs"]]
 
 
+def test_hybrid_figures_made_before_the_plane_refit_are_not_current():
+    """Settings stored before an option was recorded take the value it had then: hybrid figures
+    stored without ``geometric.refine`` were made without the refit, so they are recomputed, while
+    a missing option whose default never changed (``snap_rank``) keeps figures valid."""
+    from assist3d.learn.segmenter.probe import _current, hybrid_settings
+
+    today = hybrid_settings()
+    assert today["geometric"]["refine"] == 2 and _current(today)
+    old = json.loads(json.dumps(today))
+    del old["geometric"]["refine"]
+    assert not _current(old)
+    old["geometric"]["refine"] = 2
+    del old["hybrid"]["snap_rank"]
+    assert _current(old)
+
+
 def _room_with_boxes() -> object:
     return make_toy_scene("toy", rng=np.random.default_rng(4), num_objects=4, room_m=4.0, density_per_m2=3000)
 

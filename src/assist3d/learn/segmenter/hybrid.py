@@ -4,8 +4,8 @@ snapped to superpoints.
 
 1. the learned proposals (foreground voxels shifted by their offsets, linked within 7 cm) with
    their scores;
-2. the geometric reference's proposals (structural planes removed, connected components), scored
-   the same way as learned ones: mean foreground probability of their points x
+2. the geometric reference's proposals (structural planes removed, connected components; each
+   RANSAC plane refit twice to its inliers, ``HYBRID_GEOMETRIC``), scored the same way as learned ones: mean foreground probability of their points x
    ``min(1, voxels / 40) ** 0.5`` (5 cm voxels), so the network decides which of them look like
    objects;
 3. fallback proposals: the network's instances linked at ``fallback_radius`` (5 cm), which split
@@ -62,6 +62,13 @@ from .model import Network
 from .superpoints import SuperpointConfig, snap_masks, superpoints
 
 NMS_IOU = 0.5
+
+
+#: The geometric settings of hybrid inference: the reference's, with each RANSAC plane refit twice to
+#: its inliers, which keeps the components steadier when a scan moves by a millimetre (measured and
+#: adopted by the rule of docs/results/noise-2026-11-28/plan-refine.md; docs/fidelity.md, "Noisy
+#: scans"). The reference row itself (``segment --method geometric``) keeps ``GeometricConfig()``.
+HYBRID_GEOMETRIC = GeometricConfig(refine=2)
 
 
 @dataclass(frozen=True)
@@ -191,7 +198,7 @@ def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, offset: np.ndarr
 
 
 def segment_hybrid(model: Network, cfg: SegmenterConfig, coord: np.ndarray, color: np.ndarray | None = None, *,
-                   geometric: GeometricConfig = GeometricConfig(),
+                   geometric: GeometricConfig = HYBRID_GEOMETRIC,
                    superpoint: SuperpointConfig = SuperpointConfig(), hybrid: HybridConfig = HybridConfig(),
                    tta: bool = False, device: str = "cpu") -> Segmentation:
     """Segment one scan with the hybrid recipe: ``coord`` (N, 3) metres (z up), ``color`` (N, 3) uint8 or

@@ -46,8 +46,8 @@ from ...core.fileio import write_json_atomic
 from .checkpoint import load_segmenter, save_segmenter
 from .config import SegmenterConfig, legacy_config
 from .data import Scene
-from .geometric import GeometricConfig, segment_geometric
-from .hybrid import HybridConfig, segment_hybrid
+from .geometric import segment_geometric
+from .hybrid import HYBRID_GEOMETRIC, HybridConfig, segment_hybrid
 from .infer import segment_points
 from .superpoints import SuperpointConfig
 from .train import Budget, train_segmenter
@@ -61,18 +61,25 @@ METHODS: tuple[str, ...] = ("learned", "hybrid", "geometric")
 
 def hybrid_settings() -> dict:
     """The settings of hybrid inference as ``segment`` runs it today (stored with hybrid figures)."""
-    return json.loads(json.dumps({"hybrid": asdict(HybridConfig()), "geometric": asdict(GeometricConfig()),
+    return json.loads(json.dumps({"hybrid": asdict(HybridConfig()), "geometric": asdict(HYBRID_GEOMETRIC),
                                   "superpoint": asdict(SuperpointConfig())}))
+
+
+#: The value a setting had before it was recorded, for figures stored without it (the plane refit of
+#: hybrid inference did not exist before 2026-11-28: those figures were made without it).
+SETTINGS_BEFORE_RECORDED: dict[str, dict] = {"geometric": {"refine": 0}}
 
 
 def _current(stored: object) -> bool:
     """Whether hybrid figures made with the ``stored`` settings are today's. A setting missing from
-    ``stored`` takes today's default: options are added with defaults that keep the old behaviour,
-    so figures written before an option existed stay valid."""
+    ``stored`` takes the value it had before it was recorded (``SETTINGS_BEFORE_RECORDED``), else
+    today's default: options are added with defaults that keep the old behaviour, so figures written
+    before an option existed stay valid, unless the option's default then changed."""
     today = hybrid_settings()
     if not isinstance(stored, dict) or set(stored) - set(today):
         return False
-    return all(isinstance(stored.get(k, {}), dict) and {**v, **stored.get(k, {})} == v for k, v in today.items())
+    return all(isinstance(stored.get(k, {}), dict)
+               and {**v, **SETTINGS_BEFORE_RECORDED.get(k, {}), **stored.get(k, {})} == v for k, v in today.items())
 
 
 @dataclass(frozen=True)
