@@ -54,6 +54,7 @@ def _local_planes(coord: np.ndarray, radius: float, cell: float, k: int):
     means = np.stack([np.bincount(inverse, weights=coord[:, c].astype(np.float64), minlength=v) for c in range(3)], 1)
     means /= counts[:, None]
     dist, idx = cKDTree(means).query(means, k=min(k, v), distance_upper_bound=radius)
+    dist, idx = dist.reshape(v, -1), idx.reshape(v, -1)  # k = 1 (a single cell) gives 1-D arrays
     ok = np.isfinite(dist)  # (V, k); a cell is always its own nearest
     w = ok.astype(np.float64)
     nb = means[np.where(ok, idx, 0)]  # (V, k, 3)
@@ -84,32 +85,43 @@ def denoise_points(coord: np.ndarray, radius: float = 0.05, cell: float = 0.01, 
 
 
 def summarize_files(paths: list[Path]) -> None:
-    """Mean ± sample std over noise seeds of every (sigma, denoise, method, eval spec) AP50 and AP25."""
+    """Mean ± sample std over noise seeds of every (sigma, denoise, method, plane refits, eval spec)
+    AP50 and AP25. Files without AP rows (--mask-change results) are skipped with a note; files
+    written before --refine-planes existed were made without refits (0)."""
     import json
+    import sys
     from collections import defaultdict
 
     cells: dict[tuple, list[tuple[int, float, float]]] = defaultdict(list)
     for p in paths:
         d = json.loads(Path(p).read_text())
+        if "rows" not in d:
+            print(f"{p}: no AP rows (a --mask-change result?), skipped", file=sys.stderr)
+            continue
+        refine = d.get("refine_planes", {"geometric": 0, "hybrid": 0})
         for row in d["rows"]:
             for j, spec in enumerate(d["eval"]):
-                key = (row["sigma"], row["denoise"], row["method"], j, Path(spec.split(":", 1)[-1]).name)
+                ref = refine.get(row["method"], "-")  # the learned rows use no planes
+                key = (row["sigma"], row["denoise"], row["method"], j, Path(spec.split(":", 1)[-1]).name, ref)
                 seed = d["seed"] if row["sigma"] > 0 else 0  # sigma 0 adds no noise: one value whatever the seed
                 if all(s != seed for s, _, _ in cells[key]):
                     cells[key].append((seed, row[spec]["AP50"], row[spec]["AP25"]))
-    print("| sigma (m) | denoise | method | eval | AP50 mean ± std | AP25 mean ± std | noise seeds |")
-    print("| ---: | --- | --- | --- | ---: | ---: | --- |")
-    for key in sorted(cells, key=lambda k: (k[0], k[1], k[3], ("geometric", "learned", "hybrid").index(k[2]))):
+    print("| sigma (m) | denoise | method | plane refits | eval | AP50 mean ± std | AP25 mean ± std | noise seeds |")
+    print("| ---: | --- | --- | ---: | --- | ---: | ---: | --- |")
+    for key in sorted(cells, key=lambda k: (k[0], k[1], k[3], ("geometric", "learned", "hybrid").index(k[2]),
+                                            str(k[5]))):
         vals = np.array([v for _, v, _ in cells[key]])
         ap25 = np.array([v for _, _, v in cells[key]])
         sd = (lambda x: f"{x.std(ddof=1):.3f}" if len(x) > 1 else "-")
-        print(f"| {key[0]:g} | {'on' if key[1] else 'off'} | {key[2]} | {key[4]} | {vals.mean():.3f} ± {sd(vals)} | "
+        print(f"| {key[0]:g} | {'on' if key[1] else 'off'} | {key[2]} | {key[5]} | {key[4]} | "
+              f"{vals.mean():.3f} ± {sd(vals)} | "
               f"{ap25.mean():.3f} ± {sd(ap25)} | {','.join(str(s) for s, _, _ in sorted(cells[key]))} |")
 
 
-def mask_change(loaded, sets: list, specs: list[str], sigma: float, seeds: list[int], method: str = "hybrid",
+def mask_change(loaded, sets: list, sigma: float, seeds: list[int], method: str = "hybrid",
                 geo: GeometricConfig = GeometricConfig(), hyb_geo: GeometricConfig = HYBRID_GEOMETRIC) -> dict:
-    """How far the masks of ``method`` (hybrid, learned, geometric or superpoints: the superpoints as masks) move under noise, apart from the metric: per scan and draw, (a) each
+    """How far the masks of ``method`` (hybrid, learned, geometric or superpoints: the superpoints as
+    masks) move under noise, apart from the metric: per scan and draw, (a) each
     ground-truth object's best IoU with any predicted mask (objects of >= 100 valid points), clean and
     noisy, and how many cross IoU 0.5 either way; (b) each of the 20 highest-scored clean masks' best IoU
     with a noisy mask; (c) the share of score-order changes among pairs of clean masks matched both ways."""
@@ -160,13 +172,16 @@ def mask_change(loaded, sets: list, specs: list[str], sigma: float, seeds: list[
                             pairs += 1
                             swapped += int(rank_noisy[u] > rank_noisy[v])
     gt_delta_a, agree_a = np.array(gt_delta), np.array(agree)
+
+    def stat(x: np.ndarray, f) -> float | None:  # None where no object or mask was compared
+        return round(float(f(x)), 4) if len(x) else None
     return {"method": method, "refine_planes": (hyb_geo if method == "hybrid" else geo).refine, "sigma": sigma,
             "seeds": seeds, "objects": objects,
             "crossings_of_iou_0.5": crossings,
-            "gt_best_iou_abs_change": {"median": round(float(np.median(gt_delta_a)), 4),
-                                       "p90": round(float(np.percentile(gt_delta_a, 90)), 4)},
-            "top20_clean_mask_best_iou_with_noisy": {"median": round(float(np.median(agree_a)), 4),
-                                                     "share_below_0.8": round(float((agree_a < 0.8).mean()), 4)},
+            "gt_best_iou_abs_change": {"median": stat(gt_delta_a, np.median),
+                                       "p90": stat(gt_delta_a, lambda x: np.percentile(x, 90))},
+            "top20_clean_mask_best_iou_with_noisy": {"median": stat(agree_a, np.median),
+                                                     "share_below_0.8": stat(agree_a, lambda x: (x < 0.8).mean())},
             "score_order_swaps": {"pairs": pairs, "swapped": swapped}}
 
 
@@ -205,7 +220,7 @@ def main() -> None:
     geo = GeometricConfig() if args.refine_planes is None else GeometricConfig(refine=args.refine_planes)
     hyb_geo = HYBRID_GEOMETRIC if args.refine_planes is None else geo
     if args.mask_change:
-        out = mask_change(loaded, sets, specs, args.sigma[0], args.mask_change, args.method, geo, hyb_geo)
+        out = mask_change(loaded, sets, args.sigma[0], args.mask_change, args.method, geo, hyb_geo)
         print(out)
         write_json_atomic(args.out, {"model": str(model_path), "eval": specs, **out})
         return
@@ -222,7 +237,8 @@ def main() -> None:
                         coord = denoise_points(coord)
                     run = {"geometric": lambda: segment_geometric(coord, geo),
                            "learned": lambda: segment_points(loaded.model, loaded.config, coord, s.color),
-                           "hybrid": lambda: segment_hybrid(loaded.model, loaded.config, coord, s.color, geometric=hyb_geo)}
+                           "hybrid": lambda: segment_hybrid(loaded.model, loaded.config, coord, s.color,
+                                                            geometric=hyb_geo)}
                     segs = {m: run[m]() for m in args.methods}
                     for m, seg in segs.items():
                         matches[m][j].append(match_scene(s.instance, seg.masks, seg.scores, valid=s.valid,

@@ -269,6 +269,16 @@ def test_segment_raw_inputs_refuse_non_numbers_and_clean_colours(tmp_path):
         usable_points(str(path), sid, np.full((3, 3), np.inf, np.float32))
 
 
+def test_segment_coordinate_limit_is_taken_in_the_scans_units():
+    """The ±1e5 m limit on coordinates holds in metres whatever --units says: a point 150 m out is
+    kept in a millimetre scan (1.5e5 mm) and dropped when the same numbers are read as metres."""
+    from assist3d.cli.segment import usable_points
+
+    coord = np.array([[0.0, 0.0, 0.0], [1.5e5, 0.0, 0.0], [2.0e8, 0.0, 0.0]], np.float32)
+    assert usable_points("scan", "s", coord, "mm").tolist() == [True, True, False]
+    assert usable_points("scan", "s", coord, "m").tolist() == [True, False, False]
+
+
 # ------------------------------------------------------------------------------------ OBJ import
 
 BOX_V = "".join(f"v {x} {y} {z}\n" for x in (0, 1) for y in (0, 1) for z in (0, 1))

@@ -26,3 +26,33 @@ def test_denoise_thins_a_noisy_surface_moving_points_along_its_normal_only(load_
     # a point with fewer than three occupied cells within the radius stays where it is
     lone = np.array([[0, 0, 0], [0.5, 0, 0], [0, 0.5, 0.01]], np.float32)
     assert np.array_equal(denoise_points(lone), lone)
+    one_cell = np.array([[0.001, 0.001, 0.0], [0.002, 0.001, 0.0], [0.001, 0.002, 0.001]], np.float32)
+    assert np.array_equal(denoise_points(one_cell), one_cell)  # one cell: no plane, no crash
+
+
+def test_summary_keeps_plane_refits_apart_and_skips_mask_change_files(load_script, tmp_path, capsys):
+    """--summarize over a folder of results: the same (sigma, method, eval) made with and without plane
+    refits are two rows, never averaged together; a --mask-change file (no AP rows) is skipped with a note."""
+    import json
+
+    summarize_files = load_script("noise_robustness").summarize_files
+    spec = "array:/x/dev"
+
+    def write(name: str, seed: int, refine: int | None, ap50: float) -> None:
+        d = {"eval": [spec], "seed": seed,
+             "rows": [{"sigma": 0.001, "denoise": False, "method": "hybrid", spec: {"AP50": ap50, "AP25": 0.5}}]}
+        if refine is not None:
+            d["refine_planes"] = {"geometric": 0, "hybrid": refine}
+        (tmp_path / name).write_text(json.dumps(d))
+
+    write("a.json", 0, None, 0.20)  # written before --refine-planes: no refits
+    write("b.json", 1, 0, 0.30)
+    write("c.json", 0, 2, 0.90)
+    (tmp_path / "change.json").write_text(json.dumps({"method": "hybrid", "eval": [spec]}))
+    summarize_files(sorted(tmp_path.glob("*.json")))
+    out = capsys.readouterr()
+    rows = [line for line in out.out.splitlines() if line.startswith("| 0.001")]
+    assert len(rows) == 2, out.out
+    assert "| 0 | dev | 0.250 ± 0.071 |" in rows[0] and "0,1" in rows[0]
+    assert "| 2 | dev | 0.900 ± - |" in rows[1]
+    assert "change.json" in out.err and "skipped" in out.err

@@ -174,13 +174,16 @@ def _scan_from_file(path: Path) -> tuple[str, np.ndarray, np.ndarray | None, obj
     return path.stem, coord, color, None
 
 
-def usable_points(where: str, scene_id: str, coord: np.ndarray) -> np.ndarray:
-    """(N,) bool: the points to segment, those with finite coordinates within ``MAX_COORD_M``;
-    the others get no instance, with one warning giving their count. DataError when none is left."""
+def usable_points(where: str, scene_id: str, coord: np.ndarray, units: str = "m") -> np.ndarray:
+    """(N,) bool: the points to segment, those with finite coordinates within ``MAX_COORD_M`` metres
+    (``coord`` is in ``units``, so the limit is taken in those units); the others get no instance,
+    with one warning giving their count. DataError when none is left."""
     from ..bench.data.base import MAX_COORD_M
+    from ..learn.segmenter.features import UNITS
 
+    limit = MAX_COORD_M / UNITS[units]
     with np.errstate(invalid="ignore"):
-        ok = np.all(np.isfinite(coord) & (np.abs(coord) <= MAX_COORD_M), axis=1)
+        ok = np.all(np.isfinite(coord) & (np.abs(coord) <= limit), axis=1)
     if not ok.all():
         log.warning("%s: %d of %d points have non-finite coordinates or lie beyond ±%.0e m; they get no instance",
                     shown(scene_id), int((~ok).sum()), len(coord), MAX_COORD_M)
@@ -267,8 +270,8 @@ def segment_cmd(
     as_json: bool = typer.Option(False, "--json", help="print one JSON line per scene (instances, seconds, AP when GT is known)"),
     threads: int = typer.Option(0, "--threads", min=0, max=256, help="torch CPU threads (0 = all cores)"),
     up_axis: str = typer.Option("z", "--up-axis", help="the scan's up axis: z (ScanNet, ScanNet++, S3DIS), y (many "
-                                "mesh exports), -y, x, -x or -z; the scan is turned to z up for the model, the "
-                                "outputs keep its own coordinates"),
+                                "mesh exports), -y, x, -x or -z; the scan is turned to z up for the model; the masks, "
+                                "npz and PLY keep the input's coordinates, the PNG is the top view in metres"),
     units: str = typer.Option("m", "--units", help="the scan's length unit: m, cm or mm"),
 ) -> None:
     """Segment object instances in a scan (class-agnostic), with no GPU and no download."""
@@ -309,7 +312,7 @@ def segment_cmd(
         coord = np.asarray(coord, np.float32)
         if len(coord) == 0:
             raise DataError(f"{input_}: scene {shown(scene_id)} has no points")
-        finite = usable_points(input_, scene_id, coord)
+        finite = usable_points(input_, scene_id, coord, units)
         sub_color = color[finite] if color is not None else None
         frame = to_segmenter_frame(coord[finite], up_axis, units)  # what the model sees: metres, z up
         hint = frame_hint(frame)
@@ -329,7 +332,8 @@ def segment_cmd(
 
                 seg = segment_geometric(frame)
         except VoxelGridError as e:  # a scan too large for the voxel grid, e.g. millimetres read as metres
-            raise DataError(f"{input_}: scene {shown(scene_id)}: {e}; read with --units {units}") from None
+            hint = "give --units mm or cm if it is not in metres" if units == "m" else f"it was read in {units}: check --units"
+            raise DataError(f"{input_}: scene {shown(scene_id)}: {e}; {hint}") from None
         masks = np.zeros((len(seg.scores), len(coord)), bool)
         masks[:, finite] = seg.masks
         labels = np.full(len(coord), -1, np.int64)

@@ -99,7 +99,7 @@ def voxelize(coord: np.ndarray, size: float, color: np.ndarray | None = None,
     grid -= origin
     if grid.max() >= 2 ** 15:
         raise VoxelGridError(f"the scene spans {grid.max() * size:.0f} m along an axis; at {size} m voxels the limit "
-                         f"is {2 ** 15 * size:.0f} m (is it in millimetres?)")
+                             f"is {2 ** 15 * size:.0f} m (is it in millimetres?)")
     keys = (grid[:, 0] << 32) | (grid[:, 1] << 16) | grid[:, 2]
     _, first, inverse, counts = np.unique(keys, return_index=True, return_inverse=True, return_counts=True)
     inverse = inverse.reshape(-1)

@@ -93,10 +93,11 @@ def remove_planes(xyz: np.ndarray, cfg: GeometricConfig, rng: np.random.Generato
         n, d = best
         inl = np.abs(pts @ n + d) < cfg.plane_distance
         for _ in range(cfg.refine):  # the plane of all its inliers, not of the three points that won
-            n, d = _refit_plane(pts[inl], n)
-            inl = np.abs(pts @ n + d) < cfg.plane_distance
-            if inl.sum() < 3:
+            n2, d2 = _refit_plane(pts[inl], n)
+            inl2 = np.abs(pts @ n2 + d2) < cfg.plane_distance
+            if inl2.sum() < max(3, cfg.min_plane_fraction * v):  # a refit that loses the plane keeps the last one
                 break
+            n, d, inl = n2, d2, inl2
         if _structural(n, d, xyz, remaining[inl], floor_z, top_z):
             removed[remaining[inl]] = True
         else:

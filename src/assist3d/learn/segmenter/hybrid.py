@@ -5,9 +5,9 @@ snapped to superpoints.
 1. the learned proposals (foreground voxels shifted by their offsets, linked within 7 cm) with
    their scores;
 2. the geometric reference's proposals (structural planes removed, connected components; each
-   RANSAC plane refit twice to its inliers, ``HYBRID_GEOMETRIC``), scored the same way as learned ones: mean foreground probability of their points x
-   ``min(1, voxels / 40) ** 0.5`` (5 cm voxels), so the network decides which of them look like
-   objects;
+   RANSAC plane refit twice to its inliers, ``HYBRID_GEOMETRIC``), scored the same way as learned
+   ones: mean foreground probability of their points x ``min(1, voxels / 40) ** 0.5`` (5 cm
+   voxels), so the network decides which of them look like objects;
 3. fallback proposals: the network's instances linked at ``fallback_radius`` (5 cm), which split
    objects that touch, ranked below every proposal of steps 1-2 (scores ``s / 2`` for them,
    ``(1 + s) / 2`` for the others). Proposals ranked below all others only add points at the end
