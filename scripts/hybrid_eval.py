@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -69,7 +70,11 @@ def main() -> None:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--tta", action="store_true", help="also the rows learned+tta and hybrid+tta")
+    ap.add_argument("--refine-planes", type=int, default=None, metavar="N",
+                    help="plane refits of the hybrid rows' geometric components (default: HYBRID_GEOMETRIC's, "
+                         "today's; 0 reproduces hybrid figures made before 2026-11-28)")
     a = ap.parse_args()
+    hyb_geo = HYBRID_GEOMETRIC if a.refine_planes is None else replace(HYBRID_GEOMETRIC, refine=a.refine_planes)
     torch.set_num_threads(a.threads)
     specs = a.eval or ["array:../shared/data/real/dev", "array:../shared/data/real/scannet_scene0451_01.npy"]
     # (group, scene_id, sample, hybrid inference's geometric components, superpoints, points on its
@@ -79,8 +84,8 @@ def main() -> None:
         ds = open_dataset(spec)
         for sid in ds.scene_ids:
             s = ds.load(sid)
-            on_plane = structural_points(s.coord, HYBRID_GEOMETRIC)
-            scans.append((g, sid, s, segment_geometric(s.coord, HYBRID_GEOMETRIC, on_plane), superpoints(s.coord),
+            on_plane = structural_points(s.coord, hyb_geo)
+            scans.append((g, sid, s, segment_geometric(s.coord, hyb_geo, on_plane), superpoints(s.coord),
                           on_plane))
             reference.append(segment_geometric(s.coord))
             print("prepared", sid, flush=True)
@@ -91,7 +96,7 @@ def main() -> None:
             groups[g].append(match_scene(s.instance, masks, scores, valid=s.valid, scene_id=sid))
         return [_metrics(m) for m in groups]
 
-    result: dict = {"eval": specs, "control": {}, "models": {}}
+    result: dict = {"eval": specs, "hybrid_geometric": asdict(hyb_geo), "control": {}, "models": {}}
     result["control"]["geometric"] = score([(geo.masks, geo.scores) for geo in reference])
     result["control"]["geometric+snap"] = score([(snap_masks(geo.masks, segs), geo.scores)
                                                  for geo, (*_, segs, _) in zip(reference, scans)])

@@ -35,8 +35,30 @@ def runs(folder: Path, gen: str, max_seeds: int, part: str) -> list[dict]:
         if k >= max_seeds:
             continue
         r = json.loads(f.read_text())
-        out.append(r if part == "learned" else r["hybrid"])
+        out.append(r if part == "learned" else hybrid_without_refit(r, gen, k))
     return out
+
+
+def hybrid_without_refit(run: dict, gen: str, seed: int) -> dict:
+    """A seed's hybrid figures as every hybrid figure of these tables was made: without the plane refit
+    adopted on 2026-11-28. The probe's own when it made them so (its ``inference`` records no refit or
+    refit 0); else the model's row in a ``hybrid-eval-dev-*-r0.json`` file here (scripts/hybrid_eval.py
+    --refine-planes 0 on the dev scans), with the seed's steps and training time."""
+    h = run.get("hybrid")
+    if isinstance(h, dict) and h.get("inference", {}).get("geometric", {}).get("refine", 0) == 0:
+        return h
+    for f in sorted(HERE.glob("hybrid-eval-dev-*-r0.json")):
+        d = json.loads(f.read_text())
+        if d.get("hybrid_geometric", {}).get("refine") != 0 or len(d["eval"]) != 1:
+            raise SystemExit(f"{f}: expected hybrid_eval.py --refine-planes 0 with one --eval spec (the dev scans)")
+        for path, rows in d["models"].items():
+            if Path(path).parts[-3:-1] == (gen, f"seed_{seed}"):
+                row = rows["hybrid"][0]
+                return {**{k: row[k] for k in ("AP", "AP50", "AP25", "AR")}, "per_scene": row["scans"],
+                        "steps": run["steps"], "train_seconds": run["train_seconds"]}
+    raise SystemExit(f"{gen} seed {seed}: no hybrid figures without the plane refit; run scripts/hybrid_eval.py "
+                     f"MODEL --eval array:../shared/data/real/dev --refine-planes 0 --out "
+                     f"{HERE}/hybrid-eval-dev-NAME-r0.json")
 
 
 def print_table(rows: list[tuple[str, Path, str, int]]) -> dict:

@@ -7,6 +7,7 @@ against the household arm of part 1 (per_seed/assist3d-household-seedK.json); ar
 every model per class: per_seed/holodeck-allmodels-seedK.json) against Holodeck-style seeds 0-2 of the
 generator comparison (../fidelity-ema-2026-11-27/per_seed/). Each file is a probe seed's result.json.
 Then the plan's readings, fixed before the runs, and scene0451_01 (hybrid-eval-s0451-part2-*.json here).
+Every hybrid figure is without the plane refit, as part 1's (table.hybrid_without_refit).
 """
 
 from __future__ import annotations
@@ -68,6 +69,9 @@ def s0451() -> None:
         d = json.loads(f.read_text())
         if len(d["eval"]) != 1 or "scene0451_01" not in d["eval"][0]:
             raise SystemExit(f"{f}: expected one --eval spec, scannet_scene0451_01, not {d['eval']}")
+        if d.get("hybrid_geometric", {}).get("refine", 0) != 0:
+            raise SystemExit(f"{f}: made with the plane refit; part 1's figures were made without "
+                             f"(scripts/hybrid_eval.py --refine-planes 0)")
         for path, rows in d["models"].items():
             parts = Path(path).parts  # .../probe/GEN/seed_K/model.pt
             gen, seed = parts[-3], int(parts[-2].removeprefix("seed_"))

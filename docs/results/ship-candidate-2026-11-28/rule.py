@@ -1,0 +1,60 @@
+"""The adoption rule of plan.md beside this file, applied to the candidate's evaluation files.
+
+    python docs/results/ship-candidate-2026-11-28/rule.py
+
+Candidate: r2-clean.json and r2-1mm-seed0..4.json beside this file (scripts/noise_robustness.py with the
+candidate's model, today's inference, dev scans and scene0451_01). Shipped model: the same files in
+../noise-2026-11-28/refine/. S = mean hybrid AP50 over the six evaluations, per evaluation set.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+SHIPPED = HERE.parent / "noise-2026-11-28" / "refine"
+NAMES = ["r2-clean.json"] + [f"r2-1mm-seed{s}.json" for s in range(5)]
+SETS = ("dev", "scannet_scene0451_01.npy")
+
+
+def figures(folder: Path, method: str) -> dict[str, list[float]]:
+    """Per evaluation set, AP50 of ``method`` over the six evaluations (clean first)."""
+    out: dict[str, list[float]] = {k: [] for k in SETS}
+    for name in NAMES:
+        d = json.loads((folder / name).read_text())
+        refine = d.get("refine_planes", 0)  # an int in files written before it was recorded per method
+        if (refine if isinstance(refine, int) else refine.get("hybrid")) != 2:
+            raise SystemExit(f"{folder / name}: not made with today's hybrid inference (plane refit 2)")
+        sigma = 0.0 if name == "r2-clean.json" else 0.001
+        row = next(r for r in d["rows"] if r["method"] == method and r["sigma"] == sigma)
+        for spec in d["eval"]:
+            key = next(k for k in SETS if spec.endswith(k))
+            out[key].append(row[spec]["AP50"])
+    if any(len(v) != len(NAMES) for v in out.values()):
+        raise SystemExit(f"{folder}: expected both evaluation sets in every file")
+    return out
+
+
+def main() -> None:
+    for method in ("hybrid", "learned"):
+        cand, ship = figures(HERE, method), figures(SHIPPED, method)
+        print(f"{method} AP50 (clean / 1 mm draws 0-4 -> S, the mean of the six):")
+        for key in SETS:
+            for who, f in (("candidate", cand), ("shipped", ship)):
+                print(f"  {key:26s} {who:9s} {f[key][0]:.3f} / " + " ".join(f"{x:.3f}" for x in f[key][1:])
+                      + f" -> S {np.mean(f[key]):.4f} (draws {np.mean(f[key][1:]):.3f} ± {np.std(f[key][1:], ddof=1):.3f})")
+    cand, ship = figures(HERE, "hybrid"), figures(SHIPPED, "hybrid")
+    c_dev, s_dev = np.mean(cand["dev"]), np.mean(ship["dev"])
+    c_451, s_451 = np.mean(cand[SETS[1]]), np.mean(ship[SETS[1]])
+    r1, r2 = c_dev > s_dev, c_451 >= s_451
+    print(f"rule 1, dev S above the shipped model's: {c_dev:.4f} vs {s_dev:.4f}: {'holds' if r1 else 'fails'}")
+    print(f"rule 2, scene0451_01 S not below: {c_451:.4f} vs {s_451:.4f}: {'holds' if r2 else 'fails'}")
+    print("rule 3 (size, test_hybrid.py) is checked on the shipped file" if r1 and r2 else
+          "verdict: the shipped model stays")
+
+
+if __name__ == "__main__":
+    main()
