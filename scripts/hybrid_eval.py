@@ -4,7 +4,7 @@ components and the superpoints do not depend on the model and are computed once 
 
     python scripts/hybrid_eval.py MODEL.pt [MODEL.pt ...] --out hybrid.json
         [--eval array:../shared/data/real/dev --eval array:../shared/data/real/scannet_scene0451_01.npy]
-        [--tta]
+        [--tta] [--refine-planes N]
 
 Rows: ``geometric`` and ``geometric+snap`` (no model; the control: the reference, ``GeometricConfig()``,
 whose planes are not refit), then per model ``learned``
@@ -71,8 +71,9 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--tta", action="store_true", help="also the rows learned+tta and hybrid+tta")
     ap.add_argument("--refine-planes", type=int, default=None, metavar="N",
-                    help="plane refits of the hybrid rows' geometric components (default: HYBRID_GEOMETRIC's, "
-                         "today's; 0 reproduces hybrid figures made before 2026-11-28)")
+                    help="plane refits of the structural planes and geometric components that the hybrid "
+                         "and drop_structure rows use (default: HYBRID_GEOMETRIC's, today's; 0 reproduces "
+                         "hybrid figures made before 2026-11-28); the control rows never refit")
     a = ap.parse_args()
     hyb_geo = HYBRID_GEOMETRIC if a.refine_planes is None else replace(HYBRID_GEOMETRIC, refine=a.refine_planes)
     torch.set_num_threads(a.threads)

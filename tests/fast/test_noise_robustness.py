@@ -38,21 +38,22 @@ def test_summary_keeps_plane_refits_apart_and_skips_mask_change_files(load_scrip
     summarize_files = load_script("noise_robustness").summarize_files
     spec = "array:/x/dev"
 
-    def write(name: str, seed: int, refine: int | None, ap50: float) -> None:
+    def write(name: str, seed: int, refine: int | dict | None, ap50: float) -> None:
         d = {"eval": [spec], "seed": seed,
              "rows": [{"sigma": 0.001, "denoise": False, "method": "hybrid", spec: {"AP50": ap50, "AP25": 0.5}}]}
         if refine is not None:
-            d["refine_planes"] = {"geometric": 0, "hybrid": refine}
+            d["refine_planes"] = refine
         (tmp_path / name).write_text(json.dumps(d))
 
     write("a.json", 0, None, 0.20)  # written before --refine-planes: no refits
-    write("b.json", 1, 0, 0.30)
-    write("c.json", 0, 2, 0.90)
+    write("b.json", 1, {"geometric": 2, "hybrid": 0}, 0.30)
+    write("c.json", 0, {"geometric": 0, "hybrid": 2}, 0.90)
+    write("d.json", 1, 2, 0.70)  # the first files with refits: one number for both methods
     (tmp_path / "change.json").write_text(json.dumps({"method": "hybrid", "eval": [spec]}))
     summarize_files(sorted(tmp_path.glob("*.json")))
     out = capsys.readouterr()
     rows = [line for line in out.out.splitlines() if line.startswith("| 0.001")]
     assert len(rows) == 2, out.out
     assert "| 0 | dev | 0.250 ± 0.071 |" in rows[0] and "0,1" in rows[0]
-    assert "| 2 | dev | 0.900 ± - |" in rows[1]
+    assert "| 2 | dev | 0.800 ± 0.141 |" in rows[1] and "0,1" in rows[1]
     assert "change.json" in out.err and "skipped" in out.err

@@ -541,10 +541,12 @@ def test_refit_planes_follow_all_inliers_and_keep_the_reference_working():
         assert m["AP50"] > 0.7, (refine, m.summary)
 
 
-
 def test_a_refit_that_loses_its_plane_keeps_the_ransac_plane(monkeypatch):
-    """If a least-squares refit would leave fewer inliers than a plane needs, the RANSAC plane and its
-    inliers are kept: the floor is still removed, exactly as without refits (no empty-inlier crash)."""
+    """If a least-squares refit would leave fewer inliers than a plane needs (none, or under
+    min_plane_fraction), the RANSAC plane and its inliers are kept: the floor is still removed,
+    exactly as without refits (no empty-inlier crash)."""
+    from dataclasses import replace
+
     from assist3d.learn.segmenter import geometric as geo
 
     rng = np.random.default_rng(0)
@@ -552,9 +554,13 @@ def test_a_refit_that_loses_its_plane_keeps_the_ransac_plane(monkeypatch):
     cfg = geo.GeometricConfig(ransac_iterations=20)
     plain = geo.remove_planes(floor, cfg, np.random.default_rng(0))
     assert plain.mean() > 0.95
-    monkeypatch.setattr(geo, "_refit_plane", lambda p, n_prev: (n_prev, 100.0))  # a plane 100 m away
-    refit = geo.remove_planes(floor, geo.GeometricConfig(ransac_iterations=20, refine=2), np.random.default_rng(0))
-    assert np.array_equal(refit, plain)
+    for plane in ((None, 100.0),  # 100 m away: no inlier
+                  (np.array([1.0, 0.0, 0.0]), -2.5)):  # across the floor: a 8 cm strip, under 3 % of it
+        monkeypatch.setattr(geo, "_refit_plane",
+                            lambda p, n_prev, pl=plane: (n_prev if pl[0] is None else pl[0], pl[1]))
+        refit = geo.remove_planes(floor, replace(cfg, refine=2), np.random.default_rng(0))
+        assert np.array_equal(refit, plain), plane
+
 
 def _write_model(path: Path) -> Path:
     cfg = parse_segmenter_config(TINY_NET)

@@ -113,7 +113,7 @@ def main() -> None:
 
 
 def s0451() -> None:
-    files = sorted(HERE.glob("hybrid-eval-s0451-*.json"))
+    files = sorted(HERE.glob("hybrid-eval-s0451-household*.json"))
     per: dict[str, dict[int, float]] = {}
     geo = None
     for f in files:

@@ -20,16 +20,24 @@ NAMES = ["r2-clean.json"] + [f"r2-1mm-seed{s}.json" for s in range(5)]
 SETS = ("dev", "scannet_scene0451_01.npy")
 
 
+# The shipped model's S as plan.md fixed them (4 decimals), checked against its files below.
+PLAN_DEV, PLAN_S0451 = 0.2447, 0.1220
+
+
 def figures(folder: Path, method: str) -> dict[str, list[float]]:
     """Per evaluation set, AP50 of ``method`` over the six evaluations (clean first)."""
     out: dict[str, list[float]] = {k: [] for k in SETS}
     for name in NAMES:
         d = json.loads((folder / name).read_text())
+        if name != "r2-clean.json" and d.get("seed") != int(name.removesuffix(".json")[-1]):
+            raise SystemExit(f"{folder / name}: noise seed {d.get('seed')}, not the one its name says")
+        if folder == HERE and d["model"].endswith("segmenter-v1.pt"):
+            raise SystemExit(f"{folder / name}: made with the shipped model, not the candidate")
         refine = d.get("refine_planes", 0)  # an int in files written before it was recorded per method
         if (refine if isinstance(refine, int) else refine.get("hybrid")) != 2:
             raise SystemExit(f"{folder / name}: not made with today's hybrid inference (plane refit 2)")
         sigma = 0.0 if name == "r2-clean.json" else 0.001
-        row = next(r for r in d["rows"] if r["method"] == method and r["sigma"] == sigma)
+        row = next(r for r in d["rows"] if r["method"] == method and r["sigma"] == sigma and not r["denoise"])
         for spec in d["eval"]:
             key = next(k for k in SETS if spec.endswith(k))
             out[key].append(row[spec]["AP50"])
@@ -39,16 +47,20 @@ def figures(folder: Path, method: str) -> dict[str, list[float]]:
 
 
 def main() -> None:
+    got = {}
     for method in ("hybrid", "learned"):
-        cand, ship = figures(HERE, method), figures(SHIPPED, method)
+        got[method] = cand, ship = figures(HERE, method), figures(SHIPPED, method)
         print(f"{method} AP50 (clean / 1 mm draws 0-4 -> S, the mean of the six):")
         for key in SETS:
             for who, f in (("candidate", cand), ("shipped", ship)):
-                print(f"  {key:26s} {who:9s} {f[key][0]:.3f} / " + " ".join(f"{x:.3f}" for x in f[key][1:])
-                      + f" -> S {np.mean(f[key]):.4f} (draws {np.mean(f[key][1:]):.3f} ± {np.std(f[key][1:], ddof=1):.3f})")
-    cand, ship = figures(HERE, "hybrid"), figures(SHIPPED, "hybrid")
-    c_dev, s_dev = np.mean(cand["dev"]), np.mean(ship["dev"])
-    c_451, s_451 = np.mean(cand[SETS[1]]), np.mean(ship[SETS[1]])
+                draws = np.array(f[key][1:])
+                print(f"  {key:26s} {who:9s} {f[key][0]:.3f} / " + " ".join(f"{x:.3f}" for x in draws)
+                      + f" -> S {np.mean(f[key]):.4f} (draws {draws.mean():.3f} ± {draws.std(ddof=1):.3f})")
+    cand, ship = got["hybrid"]
+    if (round(float(np.mean(ship["dev"])), 4), round(float(np.mean(ship[SETS[1]])), 4)) != (PLAN_DEV, PLAN_S0451):
+        raise SystemExit("the shipped model's files no longer give the S values plan.md fixed")
+    c_dev, s_dev = float(np.mean(cand["dev"])), PLAN_DEV
+    c_451, s_451 = float(np.mean(cand[SETS[1]])), PLAN_S0451
     r1, r2 = c_dev > s_dev, c_451 >= s_451
     print(f"rule 1, dev S above the shipped model's: {c_dev:.4f} vs {s_dev:.4f}: {'holds' if r1 else 'fails'}")
     print(f"rule 2, scene0451_01 S not below: {c_451:.4f} vs {s_451:.4f}: {'holds' if r2 else 'fails'}")

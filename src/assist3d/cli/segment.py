@@ -332,8 +332,9 @@ def segment_cmd(
 
                 seg = segment_geometric(frame)
         except VoxelGridError as e:  # a scan too large for the voxel grid, e.g. millimetres read as metres
-            hint = "give --units mm or cm if it is not in metres" if units == "m" else f"it was read in {units}: check --units"
-            raise DataError(f"{input_}: scene {shown(scene_id)}: {e}; {hint}") from None
+            fix = ("give --units mm or cm if it is not in metres" if units == "m"
+                   else f"it was read in {units}: check --units")
+            raise DataError(f"{input_}: scene {shown(scene_id)}: {e}; {fix}") from None
         masks = np.zeros((len(seg.scores), len(coord)), bool)
         masks[:, finite] = seg.masks
         labels = np.full(len(coord), -1, np.int64)
