@@ -1,6 +1,9 @@
 """The adoption rule of plan.md beside this file, applied to the candidate's evaluation files.
 
-    python docs/results/ship-candidate-2026-11-28/rule.py
+    python docs/results/ship-candidate-2026-11-28/rule.py [FOLDER]
+
+FOLDER (default: this folder, the candidate, seed 0) holds another model's six files in the same
+names, e.g. seed1/ for the second seed, which the plan reports without a decision of its own.
 
 Candidate: r2-clean.json and r2-1mm-seed0..4.json beside this file (scripts/noise_robustness.py with the
 candidate's model, today's inference, dev scans and scene0451_01). Shipped model: the same files in
@@ -10,6 +13,7 @@ candidate's model, today's inference, dev scans and scene0451_01). Shipped model
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -31,7 +35,7 @@ def figures(folder: Path, method: str) -> dict[str, list[float]]:
         d = json.loads((folder / name).read_text())
         if name != "r2-clean.json" and d.get("seed") != int(name.removesuffix(".json")[-1]):
             raise SystemExit(f"{folder / name}: noise seed {d.get('seed')}, not the one its name says")
-        if folder == HERE and d["model"].endswith("segmenter-v1.pt"):
+        if folder != SHIPPED and d["model"].endswith("segmenter-v1.pt"):
             raise SystemExit(f"{folder / name}: made with the shipped model, not the candidate")
         refine = d.get("refine_planes", 0)  # an int in files written before it was recorded per method
         if (refine if isinstance(refine, int) else refine.get("hybrid")) != 2:
@@ -47,9 +51,10 @@ def figures(folder: Path, method: str) -> dict[str, list[float]]:
 
 
 def main() -> None:
+    folder = Path(sys.argv[1]).resolve() if len(sys.argv) > 1 else HERE
     got = {}
     for method in ("hybrid", "learned"):
-        got[method] = cand, ship = figures(HERE, method), figures(SHIPPED, method)
+        got[method] = cand, ship = figures(folder, method), figures(SHIPPED, method)
         print(f"{method} AP50 (clean / 1 mm draws 0-4 -> S, the mean of the six):")
         for key in SETS:
             for who, f in (("candidate", cand), ("shipped", ship)):
