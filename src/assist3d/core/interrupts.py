@@ -164,6 +164,7 @@ def stop_pool(pool: ProcessPoolExecutor, timeout: float = STOP_TIMEOUT_S) -> Non
     """Cancel what has not started and end the workers now: SIGTERM, then SIGKILL after ``timeout``."""
     # the executor keeps no public list of its workers before Python 3.14 (terminate_workers)
     processes = list((getattr(pool, "_processes", None) or {}).values())
+    manager = getattr(pool, "_executor_manager_thread", None)  # shutdown() forgets it
     pool.shutdown(wait=False, cancel_futures=True)
     for p in processes:
         if p.is_alive():
@@ -175,6 +176,11 @@ def stop_pool(pool: ProcessPoolExecutor, timeout: float = STOP_TIMEOUT_S) -> Non
         if p.is_alive():
             p.kill()
             p.join(1.0)
+    # Wait for the executor's manager thread too: it closes its wake-up pipe as it ends, and if that
+    # happens while the interpreter's exit hook writes to the same pipe (Python 3.11 checks, then
+    # writes, without a lock), the exit prints an OSError traceback after our one-line message.
+    if manager is not None and manager.is_alive():
+        manager.join(timeout)
 
 
 @contextmanager
