@@ -28,26 +28,26 @@ ROWS = [("ASSIST-3D, household classes", HERE / "per_seed", "assist3d-household"
         ("Holodeck-style", EMA, "holodeck-style", 3)]
 
 
-def runs(folder: Path, gen: str, max_seeds: int, part: str) -> list[dict]:
+def runs(folder: Path, gen: str, max_seeds: int, part: str, hybrid_dirs: tuple[Path, ...] = (HERE,)) -> list[dict]:
     numbered = sorted((int(f.stem.rsplit("seed", 1)[1]), f) for f in folder.glob(f"{gen}-seed*.json"))
     out = []
     for k, f in numbered:
         if k >= max_seeds:
             continue
         r = json.loads(f.read_text())
-        out.append(r if part == "learned" else hybrid_without_refit(r, gen, k))
+        out.append(r if part == "learned" else hybrid_without_refit(r, gen, k, hybrid_dirs))
     return out
 
 
-def hybrid_without_refit(run: dict, gen: str, seed: int) -> dict:
+def hybrid_without_refit(run: dict, gen: str, seed: int, hybrid_dirs: tuple[Path, ...] = (HERE,)) -> dict:
     """A seed's hybrid figures as every hybrid figure of these tables was made: without the plane refit
     adopted on 2026-11-28. The probe's own when it made them so (its ``inference`` records no refit or
-    refit 0); else the model's row in a ``hybrid-eval-dev-*-r0.json`` file here (scripts/hybrid_eval.py
+    refit 0); else the model's row in a ``hybrid-eval-dev-*-r0.json`` file of ``hybrid_dirs`` (scripts/hybrid_eval.py
     --refine-planes 0 on the dev scans), with the seed's steps and training time."""
     h = run.get("hybrid")
     if isinstance(h, dict) and h.get("inference", {}).get("geometric", {}).get("refine", 0) == 0:
         return h
-    for f in sorted(HERE.glob("hybrid-eval-dev-*-r0.json")):
+    for f in [f for d in hybrid_dirs for f in sorted(d.glob("hybrid-eval-dev-*-r0.json"))]:
         d = json.loads(f.read_text())
         if d.get("hybrid_geometric", {}).get("refine") != 0 or len(d["eval"]) != 1:
             raise SystemExit(f"{f}: expected hybrid_eval.py --refine-planes 0 with one --eval spec (the dev scans)")
@@ -58,16 +58,16 @@ def hybrid_without_refit(run: dict, gen: str, seed: int) -> dict:
                         "steps": run["steps"], "train_seconds": run["train_seconds"]}
     raise SystemExit(f"{gen} seed {seed}: no hybrid figures without the plane refit; run scripts/hybrid_eval.py "
                      f"MODEL --eval array:../shared/data/real/dev --refine-planes 0 --out "
-                     f"{HERE}/hybrid-eval-dev-NAME-r0.json")
+                     f"{hybrid_dirs[-1]}/hybrid-eval-dev-NAME-r0.json")
 
 
-def print_table(rows: list[tuple[str, Path, str, int]]) -> dict:
+def print_table(rows: list[tuple[str, Path, str, int]], hybrid_dirs: tuple[Path, ...] = (HERE,)) -> dict:
     """Print the markdown table of ``rows`` ((name, folder, generator, seeds)); returns
     ``{(name, "learned" | "hybrid"): (runs, row)}`` for the readings."""
     table: dict = {}
     for name, folder, gen, k in rows:
         for part in ("learned", "hybrid"):
-            rs = runs(folder, gen, k, part)
+            rs = runs(folder, gen, k, part, hybrid_dirs)
             if rs:
                 table[(name, part)] = (rs, row_from_runs(name, rs))
     rooms = sorted({room_of(s) for rs, _ in table.values() for r in rs for s in r["per_scene"]})
