@@ -12,16 +12,14 @@ arm A's were made. Then the plan's readings, fixed before the runs, and scene045
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
-import numpy as np
 
 HERE = Path(__file__).resolve().parent
 WHY = HERE.parent / "holodeck-why-2026-11-28"
 sys.path.insert(0, str(WHY))
-from table import EMA, print_table  # noqa: E402  (holodeck-why's reader and table of per-seed files)
+from table import EMA, print_s0451, print_table, s0451_per_seed  # noqa: E402  (holodeck-why's reader and table of per-seed files)
 
 ASSIST = "ASSIST-3D, household-sparse"
 ROWS = [(ASSIST, WHY / "per_seed", "assist3d-household-sparse", 3),
@@ -61,26 +59,8 @@ def main() -> None:
 
 
 def s0451() -> None:
-    per: dict[tuple[str, str], dict[int, float]] = {}
-    for f in sorted(HERE.glob("hybrid-eval-s0451-*.json")) + sorted(WHY.glob("hybrid-eval-s0451-part2-A2-r0.json")):
-        d = json.loads(f.read_text())
-        if len(d["eval"]) != 1 or "scene0451_01" not in d["eval"][0]:
-            raise SystemExit(f"{f}: expected one --eval spec, scannet_scene0451_01, not {d['eval']}")
-        if d.get("hybrid_geometric", {}).get("refine") != 0:
-            raise SystemExit(f"{f}: not made with scripts/hybrid_eval.py --refine-planes 0")
-        for path, rows in d["models"].items():
-            parts = Path(path).parts  # .../probe/GEN/seed_K/model.pt
-            gen, seed = parts[-3], int(parts[-2].removeprefix("seed_"))
-            for part in ("learned", "hybrid"):
-                if seed in per.get((gen, part), {}):
-                    raise SystemExit(f"{f}: {gen} seed {seed} is also in another file")
-                per.setdefault((gen, part), {})[seed] = rows[part][0]["AP50"]
-    for (gen, part), seeds in sorted(per.items()):
-        v = np.array([seeds[k] for k in sorted(seeds)])
-        sd = v.std(ddof=1) if len(v) > 1 else float("nan")
-        print(f"scene0451_01 {gen} {part}: {v.mean():.3f} ± {sd:.3f} (seeds {sorted(seeds)}: "
-              + " / ".join(f"{x:.3f}" for x in v) + ")")
-
+    files = sorted(HERE.glob("hybrid-eval-s0451-*.json")) + [WHY / "hybrid-eval-s0451-part2-A2-r0.json"]
+    print_s0451(s0451_per_seed(files), show_seeds=True)
 
 if __name__ == "__main__":
     main()

@@ -61,6 +61,38 @@ def hybrid_without_refit(run: dict, gen: str, seed: int, hybrid_dirs: tuple[Path
                      f"{hybrid_dirs[-1]}/hybrid-eval-dev-NAME-r0.json")
 
 
+def s0451_per_seed(files: list[Path], gens: tuple[str, ...] | None = None) -> dict[tuple[str, str], dict[int, float]]:
+    """AP50 on scene0451_01 per (generator, "learned" | "hybrid") and seed, from scripts/hybrid_eval.py files
+    made with ``--refine-planes 0`` and the one --eval spec scene0451_01; ``gens`` limits the models allowed."""
+    per: dict[tuple[str, str], dict[int, float]] = {}
+    for f in files:
+        d = json.loads(f.read_text())
+        if len(d["eval"]) != 1 or "scene0451_01" not in d["eval"][0]:
+            raise SystemExit(f"{f}: expected one --eval spec, scannet_scene0451_01, not {d['eval']}")
+        if d.get("hybrid_geometric", {}).get("refine") != 0:  # files that do not record it may hold refits
+            raise SystemExit(f"{f}: not recorded as made without the plane refit, as part 1's figures were "
+                             f"(scripts/hybrid_eval.py --refine-planes 0)")
+        for path, rows in d["models"].items():
+            parts = Path(path).parts  # .../probe/GEN/seed_K/model.pt
+            gen, seed = parts[-3], int(parts[-2].removeprefix("seed_"))
+            if gens is not None and gen not in gens:
+                raise SystemExit(f"{f}: {path} is not a model of {', '.join(gens)}")
+            for part in ("learned", "hybrid"):
+                if seed in per.get((gen, part), {}):
+                    raise SystemExit(f"{f}: {gen} seed {seed} is also in another file")
+                per.setdefault((gen, part), {})[seed] = rows[part][0]["AP50"]
+    return per
+
+
+def print_s0451(per: dict[tuple[str, str], dict[int, float]], show_seeds: bool = False) -> None:
+    """One line per (generator, part): mean ± std over its seeds and each seed's AP50."""
+    for (gen, part), seeds in sorted(per.items()):
+        v = np.array([seeds[k] for k in sorted(seeds)])
+        sd = v.std(ddof=1) if len(v) > 1 else float("nan")
+        label = f"seeds {sorted(seeds)}: " if show_seeds else ""
+        print(f"scene0451_01 {gen} {part}: {v.mean():.3f} ± {sd:.3f} ({label}" + " / ".join(f"{x:.3f}" for x in v) + ")")
+
+
 def print_table(rows: list[tuple[str, Path, str, int]], hybrid_dirs: tuple[Path, ...] = (HERE,)) -> dict:
     """Print the markdown table of ``rows`` ((name, folder, generator, seeds)); returns
     ``{(name, "learned" | "hybrid"): (runs, row)}`` for the readings."""

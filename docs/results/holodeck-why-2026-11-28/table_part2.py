@@ -12,15 +12,13 @@ Every hybrid figure is without the plane refit, as part 1's (table.hybrid_withou
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
-import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from table import EMA, print_table  # noqa: E402  (part 1's reader and table of per-seed files)
+from table import EMA, print_s0451, print_table, s0451_per_seed  # noqa: E402  (part 1's reader and table of per-seed files)
 
 ROWS = [("A: ASSIST-3D, household classes, sparser", HERE / "per_seed", "assist3d-household-sparse", 3),
         ("ASSIST-3D, household classes (part 1)", HERE / "per_seed", "assist3d-household", 3),
@@ -64,28 +62,8 @@ def main() -> None:
 
 
 def s0451() -> None:
-    per: dict[tuple[str, str], dict[int, float]] = {}
-    for f in sorted(HERE.glob("hybrid-eval-s0451-part2-*.json")):
-        d = json.loads(f.read_text())
-        if len(d["eval"]) != 1 or "scene0451_01" not in d["eval"][0]:
-            raise SystemExit(f"{f}: expected one --eval spec, scannet_scene0451_01, not {d['eval']}")
-        if d.get("hybrid_geometric", {}).get("refine") != 0:  # files that do not record it may hold refits
-            raise SystemExit(f"{f}: not recorded as made without the plane refit, as part 1's figures were "
-                             f"(scripts/hybrid_eval.py --refine-planes 0)")
-        for path, rows in d["models"].items():
-            parts = Path(path).parts  # .../probe/GEN/seed_K/model.pt
-            gen, seed = parts[-3], int(parts[-2].removeprefix("seed_"))
-            if gen not in ("assist3d-household-sparse", "holodeck-allmodels"):
-                raise SystemExit(f"{f}: {path} is not a model of part 2")
-            for part in ("learned", "hybrid"):
-                if seed in per.get((gen, part), {}):
-                    raise SystemExit(f"{f}: {gen} seed {seed} is also in another file")
-                per.setdefault((gen, part), {})[seed] = rows[part][0]["AP50"]
-    for (gen, part), seeds in sorted(per.items()):
-        v = np.array([seeds[k] for k in sorted(seeds)])
-        sd = v.std(ddof=1) if len(v) > 1 else float("nan")
-        print(f"scene0451_01 {gen} {part}: {v.mean():.3f} ± {sd:.3f} (" + " / ".join(f"{x:.3f}" for x in v) + ")")
-
+    files = sorted(HERE.glob("hybrid-eval-s0451-part2-*.json"))
+    print_s0451(s0451_per_seed(files, gens=("assist3d-household-sparse", "holodeck-allmodels")))
 
 if __name__ == "__main__":
     main()
