@@ -15,7 +15,6 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-
 HERE = Path(__file__).resolve().parent
 WHY = HERE.parent / "holodeck-why-2026-11-28"
 sys.path.insert(0, str(WHY))
