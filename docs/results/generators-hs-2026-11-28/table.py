@@ -15,6 +15,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import numpy as np
+
 HERE = Path(__file__).resolve().parent
 WHY = HERE.parent / "holodeck-why-2026-11-28"
 sys.path.insert(0, str(WHY))
@@ -58,8 +60,26 @@ def main() -> None:
 
 
 def s0451() -> None:
+    """scene0451_01 per generator and seed, then plan.md's amendment 2 reading once ASSIST-3D has 3 seeds."""
     files = sorted(HERE.glob("hybrid-eval-s0451-*.json")) + [WHY / "hybrid-eval-s0451-part2-A2-r0.json"]
-    print_s0451(s0451_per_seed(files), show_seeds=True)
+    per = s0451_per_seed(files)
+    print_s0451(per, show_seeds=True)
+    a = "assist3d-household-sparse"
+    for part in ("learned", "hybrid"):
+        seeds_a = per.get((a, part), {})
+        if len(seeds_a) < 3:
+            print(f"scene0451_01 reading ({part}): pending ({len(seeds_a)} of 3 ASSIST-3D seeds; plan.md, amendment 2)")
+            continue
+        va = np.array(list(seeds_a.values()))
+        for x in ("mesh-sampled-household-sparse", "randomrooms-household-sparse"):
+            vx = np.array(list(per.get((x, part), {}).values()))
+            if len(vx) < 3:
+                print(f"scene0451_01 reading ({part}) against {x}: pending ({len(vx)} of 3 seeds)")
+                continue
+            gap, sd = va.mean() - vx.mean(), max(va.std(ddof=1), vx.std(ddof=1))
+            verdict = "confirmed on scene0451_01" if gap > sd else "not confirmed"
+            print(f"scene0451_01 reading ({part}{', the plan reads this row' if part == 'learned' else ', beside it'}) "
+                  f"against {x}: {va.mean():.3f} vs {vx.mean():.3f}, gap {gap:+.3f} against the larger std {sd:.3f}: {verdict}")
 
 if __name__ == "__main__":
     main()
