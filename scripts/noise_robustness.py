@@ -84,11 +84,18 @@ def denoise_points(coord: np.ndarray, radius: float = 0.05, cell: float = 0.01, 
     return (coord.astype(np.float64) - off[:, None] * n_p).astype(np.float32)
 
 
+def plane_refits(record: dict) -> dict[str, int]:
+    """The plane refits of a result file of this script, per method (``geometric``, ``hybrid``): files
+    written before --refine-planes existed were made without refits (0), and the first ones written with
+    it hold one number for both methods."""
+    refine = record.get("refine_planes", 0)
+    return {"geometric": refine, "hybrid": refine} if isinstance(refine, int) else refine
+
+
 def summarize_files(paths: list[Path]) -> None:
     """Mean ± sample std over noise seeds of every (sigma, denoise, method, plane refits, eval spec)
-    AP50 and AP25. Files without AP rows (--mask-change results) are skipped with a note; files
-    written before --refine-planes existed were made without refits (0), and the first ones written
-    with it hold one number for both methods."""
+    AP50 and AP25. Files without AP rows (--mask-change results) are skipped with a note; plane refits
+    as :func:`plane_refits` reads them."""
     import json
     import sys
     from collections import defaultdict
@@ -99,9 +106,7 @@ def summarize_files(paths: list[Path]) -> None:
         if "rows" not in d:
             print(f"{p}: no AP rows (a --mask-change result?), skipped", file=sys.stderr)
             continue
-        refine = d.get("refine_planes", 0)
-        if isinstance(refine, int):  # one number for both, as written before it was recorded per method
-            refine = {"geometric": refine, "hybrid": refine}
+        refine = plane_refits(d)
         for row in d["rows"]:
             for j, spec in enumerate(d["eval"]):
                 ref = refine.get(row["method"], "-")  # the learned rows use no planes

@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parents[2] / "scripts"))
+from noise_robustness import plane_refits  # noqa: E402  (how that script's files record the refits)
 SHIPPED = HERE.parent / "noise-2026-11-28" / "refine"
 NAMES = ["r2-clean.json"] + [f"r2-1mm-seed{s}.json" for s in range(5)]
 SETS = ("dev", "scannet_scene0451_01.npy")
@@ -37,8 +39,7 @@ def figures(folder: Path, method: str) -> dict[str, list[float]]:
             raise SystemExit(f"{folder / name}: noise seed {d.get('seed')}, not the one its name says")
         if folder != SHIPPED and d["model"].endswith("segmenter-v1.pt"):
             raise SystemExit(f"{folder / name}: made with the shipped model, not the candidate")
-        refine = d.get("refine_planes", 0)  # an int in files written before it was recorded per method
-        if (refine if isinstance(refine, int) else refine.get("hybrid")) != 2:
+        if plane_refits(d).get("hybrid") != 2:
             raise SystemExit(f"{folder / name}: not made with today's hybrid inference (plane refit 2)")
         sigma = 0.0 if name == "r2-clean.json" else 0.001
         row = next(r for r in d["rows"] if r["method"] == method and r["sigma"] == sigma and not r["denoise"])
