@@ -63,9 +63,9 @@ def main() -> None:
               f"{int(np.sum(a > b))} of 3 paired seeds: {verdict}")
     print("the amendment: six evaluations per model (clean + five 1 mm draws, today's inference), dev AP50")
     evals = {g: eval_dirs(g) for g in GENS}
+    figs = {g: [{m: figures(d, m) for m in ("learned", "hybrid")} for d in dirs] for g, dirs in evals.items()}
     for g, dirs in evals.items():
-        for i, d in enumerate(dirs):
-            f = {m: figures(d, m) for m in ("learned", "hybrid")}
+        for i, (d, f) in enumerate(zip(dirs, figs[g])):
             print(f"  {GENS[g]:18s} {d.name if g != ASSIST else f'seed {i}'}: "
                   + "   ".join(f"{m} clean {f[m]['dev'][0]:.3f}, draws {np.mean(f[m]['dev'][1:]):.3f}; "
                              f"scene0451_01 clean {f[m]['scannet_scene0451_01.npy'][0]:.3f}" for m in f))
@@ -73,7 +73,7 @@ def main() -> None:
         print("  reading of the amendment: partial (" + ", ".join(f"{GENS[g]} {len(d)}" for g, d in evals.items())
               + " of 3 models), no verdict")
         return
-    dev = np.array([[figures(d, "hybrid")["dev"] for d in evals[g]] for g in GENS])  # (gens, seeds, 6)
+    dev = np.array([[f["hybrid"]["dev"] for f in figs[g]] for g in GENS])  # (gens, seeds, 6)
     clean, draws = dev[..., 0], dev[..., 1:]
     sd_a, sd_b, within = spreads(clean, draws)
     gaps_a = [(clean[0].mean() - clean[j].mean()) / sd_a for j in (1, 2)]

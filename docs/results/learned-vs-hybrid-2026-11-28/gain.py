@@ -21,7 +21,9 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE.parent
 sys.path.insert(0, str(RESULTS / "ship-candidate-2026-11-28"))
+sys.path.insert(0, str(RESULTS / "noise-2026-11-28"))
 from rule import figures  # noqa: E402
+from spread2_table import FILES, ap50  # noqa: E402  (the spread2 files, checked as that table reads them)
 
 
 def models() -> list[tuple[str, float, float]]:
@@ -32,12 +34,9 @@ def models() -> list[tuple[str, float, float]]:
             d = json.loads(p.read_text())
             if isinstance(d.get("hybrid"), dict) and d.get("steps") == 200:
                 out.append((f"{folder[:-11]}/{p.stem}", d["AP50"], d["hybrid"]["AP50"]))
-    for p in sorted((RESULTS / "noise-2026-11-28" / "spread2").glob("*-clean.json")):
-        d = json.loads(p.read_text())
-        if d.get("refine_planes") not in (0, {"geometric": 0, "hybrid": 0}):
-            raise SystemExit(f"{p}: made with the plane refit")
-        row = {r["method"]: r[d["eval"][0]]["AP50"] for r in d["rows"] if r["sigma"] == 0.0}
-        out.append((f"household-sparse/{p.stem.removesuffix('-clean')}", row["learned"], row["hybrid"]))
+    for p in sorted(FILES.glob("*-clean.json")):
+        out.append((f"household-sparse/{p.stem.removesuffix('-clean')}",
+                    ap50(p.name, "learned", 0.0, None), ap50(p.name, "hybrid", 0.0, None)))
     return out
 
 

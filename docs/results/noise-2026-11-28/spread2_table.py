@@ -23,6 +23,7 @@ SEEDS, DRAWS = range(3), range(5)
 CAND = HERE.parent / "ship-candidate-2026-11-28"
 sys.path.insert(0, str(CAND))
 from rule import figures  # noqa: E402  (the candidate's evaluation files, checked as its rule reads them)
+from noise_robustness import plane_refits  # noqa: E402  (rule.py put scripts/ on the path)
 
 
 def ap50(name: str, method: str, sigma: float, seed: int | None) -> float:
@@ -30,7 +31,7 @@ def ap50(name: str, method: str, sigma: float, seed: int | None) -> float:
     d = json.loads(path.read_text())
     if len(d["eval"]) != 1 or not d["eval"][0].endswith("/dev"):
         raise SystemExit(f"{path}: not one evaluation on the dev scans")
-    if d.get("refine_planes") not in (0, {"geometric": 0, "hybrid": 0}):
+    if plane_refits(d) != {"geometric": 0, "hybrid": 0}:
         raise SystemExit(f"{path}: made with the plane refit; the amendment fixes hybrid without it")
     if seed is not None and d.get("seed") != seed:
         raise SystemExit(f"{path}: noise seed {d.get('seed')}, not {seed}")

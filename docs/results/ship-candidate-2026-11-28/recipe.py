@@ -16,8 +16,14 @@ from rule import HERE, PLAN_DEV, PLAN_S0451, SETS, figures
 FOLDERS = [HERE, HERE / "seed1", HERE / "seed2"]
 
 
+def s_values(folder, method: str) -> list[float]:
+    """S per evaluation set (SETS order) of one model's six evaluations."""
+    fig = figures(folder, method)
+    return [float(np.mean(fig[k])) for k in SETS]
+
+
 def main() -> None:
-    s = {m: np.array([[np.mean(figures(f, m)[k]) for k in SETS] for f in FOLDERS]) for m in ("learned", "hybrid")}
+    s = {m: np.array([s_values(f, m) for f in FOLDERS]) for m in ("learned", "hybrid")}
     print("S per seed (dev / scene0451_01):")
     for i in range(len(FOLDERS)):
         print(f"  seed {i}: learned {s['learned'][i, 0]:.4f} / {s['learned'][i, 1]:.4f}   "
