@@ -9,10 +9,11 @@ paths, run when a GPU is at hand (docs/model.md, "CUDA check"):
   ``train()`` to a checkpoint on CUDA, resumed for one more epoch; ``predict_scene`` on CUDA against the CPU
   with the same weights; ``run_model_bench`` on CUDA (forward, forward+backward, peak memory).
   After 150 fp32 training steps (so that masks exist) ``predict_scene`` and the final mask logits on
-  CUDA against the CPU; the fp16 gradient scaler saved in a checkpoint, read back and restored.
+  CUDA against the CPU; the fp16 gradient scaler saved in a checkpoint, read back and restored; fp16
+  training resumed from a checkpoint written after real optimiser steps, against the run that wrote it.
 - CPU segmenter: the shipped model's per-voxel outputs on a real scan on the CPU and on CUDA,
   ``segment_hybrid`` on both (instances, AP50 against the scan's labels, seconds), and training
-  steps on CUDA (the loss must fall).
+  steps on CUDA (the loss must fall); its training interrupted and resumed from last.pt.
 
     python scripts/cuda_check.py --scan SCAN.npy --out report.json [--steps 60] [--only SECTION ...]
 
@@ -206,6 +207,73 @@ def mask3d_fp16_scaler_resume(tmp: Path) -> dict:
             "ok": bool(all(same.values()) and np.isfinite(st.loss))}
 
 
+def _max_param_diff(a: torch.nn.Module, b: torch.nn.Module) -> float:
+    sa, sb = a.state_dict(), b.state_dict()
+    return max(float((sa[k].float() - sb[k].float()).abs().max()) for k in sa if sa[k].numel())
+
+
+def mask3d_fp16_resume_equivalence(tmp: Path, warm: int = 30, after: int = 3) -> dict:
+    """fp16 + gradient scaler, resumed from a checkpoint written after steps that were *not* skipped.
+
+    ``warm`` steps first, so that the scaler settles below overflow and the optimiser really steps (the
+    growth tracker counts steps since the last overflow); then a checkpoint, ``after`` more steps on the
+    trainer that wrote it, and the same ``after`` steps (same batches and random streams) on a fresh
+    trainer restored from the file. The two must agree (losses and weights) as closely as two identical
+    runs on this device do, and much closer than a control restored with the weights alone (fresh
+    optimiser moments and scaler), which shows that the check can fail.
+    """
+    from assist3d.learn.engine.train import load_checkpoint, save_checkpoint
+
+    scenes = _toy(4)
+    cfg = parse_train_config(_cfg(amp=True))
+    total = warm + after + 4
+
+    def new():
+        tr = _trainer(cfg, scenes, total, fp16=True)
+        if tr.scaler is None and DEV == "cpu":  # dry run: a CPU scaler exercises the same state handling
+            tr.scaler = torch.amp.GradScaler("cpu")
+        return tr
+
+    def go(tr, first: int, n: int) -> list[float]:
+        return [float(tr.step([s % 4, (s + 1) % 4], rng=np.random.default_rng(s)).loss)
+                for s in range(first, first + n)]
+
+    tr = new()
+    if tr.scaler is None:
+        return {"ok": None, "reason": f"no gradient scaler on {DEV} (fp16 AMP is CUDA-only)"}
+    scales = []
+    for s in range(warm):
+        go(tr, s, 1)
+        scales.append(float(tr.scaler.get_scale()))
+    saved = {k: float(v) for k, v in tr.scaler.state_dict().items()}
+    adam_steps = [float(st["step"]) for st in tr.optimizer.state_dict()["state"].values() if "step" in st]
+    tmp.mkdir(parents=True, exist_ok=True)
+    path = tmp / "fp16_equiv.pt"
+    save_checkpoint(path, tr.model, tr.optimizer, tr.scheduler, 1, warm, cfg, tr.scaler)
+    loss_cont = go(tr, warm, after)
+    state = load_checkpoint(path, map_location=DEV)
+    res = new()
+    res.restore(state)
+    restored = {k: float(v) for k, v in res.scaler.state_dict().items()}
+    loss_res = go(res, warm, after)
+    # the noise floor: the same checkpoint restored a second time, the same steps
+    twin = new()
+    twin.restore(load_checkpoint(path, map_location=DEV))
+    go(twin, warm, after)
+    # the control: weights only, fresh optimiser moments, schedule and scaler
+    ctl = new()
+    ctl.model.load_state_dict(state["model"])
+    loss_ctl = go(ctl, warm, after)
+    d_res, d_twin, d_ctl = (_max_param_diff(tr.model, t.model) for t in (res, twin, ctl))
+    real_steps = int(min(adam_steps)) if adam_steps else 0
+    return {"warm_steps": warm, "scales": scales, "saved": saved, "restored": restored,
+            "optimizer_steps_taken_before_save": real_steps,
+            "loss_continued": loss_cont, "loss_resumed": loss_res, "loss_weights_only_control": loss_ctl,
+            "param_diff_resumed": d_res, "param_diff_twin_restore": d_twin, "param_diff_control": d_ctl,
+            "ok": bool(real_steps > 0 and saved == restored and np.isfinite(loss_res).all()
+                       and d_res <= max(10 * d_twin, 1e-6) and d_ctl > 10 * max(d_res, 1e-7))}
+
+
 def mask3d_bench() -> dict:
     from assist3d.learn.engine.bench import run_model_bench
     from assist3d.learn.engine.config import TrainConfig
@@ -270,6 +338,52 @@ def segmenter_training(tmp: Path, steps: int) -> dict:
             "ok": bool(np.isfinite(loss).all() and last < first)}
 
 
+def segmenter_resume(tmp: Path, steps: int = 24, cut: int = 12) -> dict:
+    """The segmenter's training interrupted after ``cut`` steps and resumed from last.pt on DEV, against an
+    uninterrupted run with the same seed (and a second uninterrupted run: this device's noise floor)."""
+    from assist3d.learn.segmenter import train as train_mod
+    from assist3d.learn.segmenter.checkpoint import load_segmenter
+    from assist3d.learn.segmenter.config import parse_segmenter_config
+    from assist3d.learn.segmenter.data import Scene
+    from assist3d.learn.segmenter.train import Budget, train_segmenter
+
+    scenes = [Scene.from_sample(x) for x in _toy(6)]
+    cfg = parse_segmenter_config({}, "defaults")
+    root = tmp / "segresume"
+    for name in ("full", "full2"):
+        train_segmenter(cfg, scenes, root / name, seed=0, budget=Budget(steps=steps, minutes=None), device=DEV)
+    every = train_mod.CHECKPOINT_EVERY_S
+    train_mod.CHECKPOINT_EVERY_S = -1.0  # a checkpoint after every step
+
+    def stop(row: dict) -> None:
+        if row["step"] == cut + 1:
+            raise KeyboardInterrupt
+
+    try:
+        try:
+            train_segmenter(cfg, scenes, root / "cut", seed=0, budget=Budget(steps=steps, minutes=None), device=DEV,
+                            on_step=stop)
+        except KeyboardInterrupt:
+            pass
+    finally:
+        train_mod.CHECKPOINT_EVERY_S = every
+    at = int(load_segmenter(root / "cut" / "last.pt").progress["step"])
+    train_segmenter(cfg, scenes, root / "cut", seed=0, budget=Budget(steps=steps, minutes=None), device=DEV)
+    m = {n: load_segmenter(root / n / "last.pt").model for n in ("full", "full2", "cut")}
+
+    def losses(n: str) -> list[float]:
+        rows = (root / n / "train_log.csv").read_text().splitlines()
+        i = rows[0].split(",").index("loss")
+        return [float(r.split(",")[i]) for r in rows[1:]]
+
+    d_cut, d_twin = _max_param_diff(m["full"], m["cut"]), _max_param_diff(m["full"], m["full2"])
+    lf, lc = losses("full"), losses("cut")
+    return {"steps": steps, "resumed_from_step": at, "logged_steps_cut": len(lc),
+            "param_diff_resumed": d_cut, "param_diff_two_full_runs": d_twin,
+            "loss_max_abs_diff": float(np.abs(np.array(lf) - np.array(lc)).max()) if len(lf) == len(lc) else None,
+            "ok": bool(at == cut and len(lc) == steps and d_cut <= max(10 * d_twin, 1e-5))}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scan", type=Path, required=True, help="a real scan (N, 8) .npy with instance labels")
@@ -297,7 +411,9 @@ def main() -> None:
                 ("segmenter_shipped", lambda: segmenter_shipped(a.scan)),
                 ("segmenter_training", lambda: segmenter_training(a.tmp, a.steps)),
                 ("mask3d_predict_parity", lambda: mask3d_predict_parity(a.predict_steps)),
-                ("mask3d_fp16_scaler_resume", lambda: mask3d_fp16_scaler_resume(a.tmp))]
+                ("mask3d_fp16_scaler_resume", lambda: mask3d_fp16_scaler_resume(a.tmp)),
+                ("mask3d_fp16_resume_equivalence", lambda: mask3d_fp16_resume_equivalence(a.tmp)),
+                ("segmenter_resume", lambda: segmenter_resume(a.tmp))]
     if a.only:
         unknown = sorted(set(a.only) - {n for n, _ in sections})
         if unknown:
