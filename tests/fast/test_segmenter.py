@@ -73,6 +73,50 @@ def test_scene_norm_of_a_scene_does_not_depend_on_its_batch():
     assert torch.allclose(both[50:].mean(0), torch.zeros(4), atol=1e-5)
 
 
+@pytest.mark.parametrize("sizes", [[40, 1, 30], [40, 0, 30], [60], [2, 90, 3]])
+def test_scene_norm_fast_path_equals_the_general_formula(sizes, monkeypatch):
+    """The fused per-scene batch-norm path (rows of each scene contiguous) gives the scatter-add formula's
+    values and gradients; a single-row scene and shuffled rows take the general path and agree too."""
+    gen = torch.Generator().manual_seed(1)
+    batch = torch.cat([torch.full((n,), k, dtype=torch.int64) for k, n in enumerate(sizes)])
+    n = len(batch)
+    xyz = torch.stack([torch.randperm(10_000, generator=gen)[:n] for _ in range(3)], 1)  # unique sites
+    coords = torch.cat([batch[:, None], xyz], 1)
+    feats = torch.randn(n, 5, generator=gen) * 4 + 2
+    grad = torch.randn(n, 5, generator=gen)
+    norm = SparseSceneNorm(5)
+    with torch.no_grad():
+        norm.weight.copy_(torch.rand(5, generator=gen) + 0.5)
+        norm.bias.copy_(torch.randn(5, generator=gen))
+
+    def run(rows: torch.Tensor, path: str):
+        f = feats[rows].clone().requires_grad_(True)
+        norm.zero_grad()
+        if path == "module":
+            out = norm(sparse_tensor(coords[rows], f)).feats
+        else:
+            out = norm.reference(f, batch[rows])
+        out.backward(grad[rows])
+        return out.detach(), f.grad, norm.weight.grad.clone(), norm.bias.grad.clone()
+
+    ident = torch.arange(n)
+    ref = run(ident, "reference")
+    if min(k for k in sizes if k) > 1:  # the fused path must be the one taken
+        with monkeypatch.context() as m:
+            m.setattr(norm, "reference", lambda *a: pytest.fail("general path taken for contiguous scenes"))
+            fast = run(ident, "module")
+    else:
+        fast = run(ident, "module")
+    for a, b in zip(fast, ref):
+        assert torch.allclose(a, b, rtol=1e-4, atol=1e-4)
+    first = fast[0][batch == 0]  # normalised per scene: mean = bias, std = weight
+    assert torch.allclose(first.mean(0), norm.bias.detach(), atol=1e-5)
+    assert torch.allclose(first.std(0, unbiased=False), norm.weight.detach(), rtol=1e-3)
+    perm = torch.randperm(n, generator=gen)  # rows out of scene order: the general path, same values per row
+    shuffled = run(perm, "module")
+    assert torch.allclose(shuffled[0], fast[0][perm], atol=1e-5)
+
+
 def test_offsets_separate_touching_objects_and_fragments_rank_low():
     # two touching 10-voxel bars; offsets point each voxel at its own bar's centre
     centres = np.array([[0.05 * i, 0.0, 0.0] for i in range(20)])
