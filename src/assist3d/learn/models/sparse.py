@@ -124,6 +124,16 @@ class CoordSet:
             self.cache[key] = maps
         return self.cache[key]
 
+    def scene_sizes(self) -> list[int] | None:
+        """Rows per scene (batch index ``coords[:, 0]``) when each scene's rows are contiguous and in batch
+        order, as in every set the package builds (the batch index is the top of the sort key); else None."""
+        key = ("scene_sizes",)
+        if key not in self.cache:
+            b = self.coords[:, 0].to(torch.int64)
+            ordered = len(b) > 0 and bool((b[1:] >= b[:-1]).all())
+            self.cache[key] = torch.bincount(b).tolist() if ordered else None
+        return self.cache[key]
+
     def down(self) -> tuple["CoordSet", torch.Tensor, torch.Tensor]:
         """Coarser set ``unique(coord // 2)``; parent row of every row ``(N,)`` and child octant ``(N,)``."""
         key = ("down",)
@@ -329,18 +339,15 @@ class SparseSceneNorm(nn.Module):
 
     def forward(self, x: SparseTensor) -> SparseTensor:
         f = x.feats
-        b = x.coords[:, 0].to(torch.int64)
-        if len(b) > 1 and bool((b[1:] >= b[:-1]).all()):
-            # Each scene's rows are contiguous (true of every set the package builds: the batch index is
-            # the top of the sort key): each scene is one call of the fused batch-norm kernel in training
-            # mode without running statistics, which is this normalisation (biased variance) at about a
-            # third of the time of the general path below (docs/fidelity.md, "Cost").
-            sizes = torch.bincount(b).tolist()
-            if min(s for s in sizes if s) > 1:  # batch_norm refuses a single row; the general path handles it
-                parts = [F.batch_norm(p, None, None, self.weight, self.bias, True, 0.0, self.eps)
-                         for p in f.split(sizes) if len(p)]
-                return x.replace(parts[0] if len(parts) == 1 else torch.cat(parts))
-        return x.replace(self.reference(f, b))
+        # Scenes in contiguous rows (known once per coordinate set): each scene is one call of the fused
+        # batch-norm kernel in training mode without running statistics, which is this normalisation
+        # (biased variance) at a fraction of the general path's time (docs/fidelity.md, "Cost").
+        sizes = x.cset.scene_sizes()
+        if sizes is not None and min(s for s in sizes if s) > 1:  # batch_norm refuses a single row
+            parts = [F.batch_norm(p, None, None, self.weight, self.bias, True, 0.0, self.eps)
+                     for p in f.split(sizes) if len(p)]
+            return x.replace(parts[0] if len(parts) == 1 else torch.cat(parts))
+        return x.replace(self.reference(f, x.coords[:, 0].to(torch.int64)))
 
     def reference(self, f: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
         """The normalisation for rows in any order: per-scene mean and biased variance by scatter-adds."""
