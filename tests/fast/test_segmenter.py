@@ -468,6 +468,30 @@ def test_probe_runs_end_to_end_writes_the_json_contract_and_resumes(tiny_data, t
     assert r3.exit_code != 0 and "other settings" in str(r3.exception or r3.output)
 
 
+def test_probe_first_seed_splits_a_probe_and_a_full_run_reads_the_parts(tiny_data, tmp_path):
+    cfg = tmp_path / "seg.yaml"
+    cfg.write_text(json.dumps(TINY_NET))
+
+    def probe(out: Path, *extra: str) -> dict:
+        r = runner.invoke(app, ["probe", "--train", f"assist3d:{tiny_data}", "--eval", f"assist3d:{tiny_data}",
+                                "--steps", "2", "--out", str(out), "--config", str(cfg), "--json", *extra])
+        assert r.exit_code == 0, r.output
+        return json.loads(r.stdout[r.stdout.index("{"):])
+
+    whole = probe(tmp_path / "whole", "--seeds", "2")
+    part = probe(tmp_path / "split", "--seeds", "1", "--first-seed", "1")
+    assert [run["seed"] for run in part["runs"]] == [1] and not (tmp_path / "split" / "seed_0").exists()
+    same = lambda run: {k: v for k, v in run.items() if k not in ("train_seconds", "predict_seconds")}  # noqa: E731
+    assert same(part["runs"][0]) == same(whole["runs"][1])  # seed 1 alone is seed 1 of the whole probe
+    a = torch.load(tmp_path / "whole" / "seed_1" / "model.pt", weights_only=True)["state_dict"]
+    b = torch.load(tmp_path / "split" / "seed_1" / "model.pt", weights_only=True)["state_dict"]
+    assert all(torch.equal(a[k], b[k]) for k in a)
+    stamp = (tmp_path / "split" / "seed_1" / "model.pt").stat().st_mtime_ns
+    full = probe(tmp_path / "split", "--seeds", "2")  # trains seed 0, reads seed 1
+    assert [same(r) for r in full["runs"]] == [same(r) for r in whole["runs"]]
+    assert (tmp_path / "split" / "seed_1" / "model.pt").stat().st_mtime_ns == stamp
+
+
 def test_probe_hybrid_scores_segment_default_and_is_added_to_a_finished_folder(tiny_data, tmp_path):
     from assist3d.learn.segmenter.hybrid import segment_hybrid
 

@@ -45,6 +45,9 @@ def probe_cmd(
     minutes: Optional[float] = typer.Option(None, "--minutes", help="training budget per seed in minutes"),
     steps: Optional[int] = typer.Option(None, "--steps", help="training budget per seed in steps (deterministic)"),
     seeds: int = typer.Option(1, "--seeds", min=1, max=100, help="repeat with seeds 0..K-1; report mean and std"),
+    first_seed: int = typer.Option(0, "--first-seed", min=0, max=10_000,
+                                   help="start the seeds at S (seeds S..S+K-1): to split one probe over "
+                                        "processes or machines, each writing its seed_K folders"),
     out: Path = typer.Option(Path("probe_out"), "--out", "-o", help="resumable output folder"),
     config: Optional[Path] = typer.Option(None, "--config", "-c", help="segmenter config YAML (net, augment, cluster, optim)"),
     max_train_scenes: int = typer.Option(0, "--max-train-scenes", min=0, help="use the first N scenes of each training set (0 = all)"),
@@ -115,7 +118,7 @@ def probe_cmd(
                               f"{info['train_seconds'] / 60:.1f} min{', cached' if info.get('cached') else ''})")
 
         summary = run_probe(req, out, device=resolve_device(device), loader_workers=loader_workers,
-                            hybrid=hybrid, on_event=on_event)
+                            hybrid=hybrid, first_seed=first_seed, on_event=on_event)
     if as_json:
         typer.echo(json.dumps({k: summary[k] for k in ("runs", "mean", "std", "hybrid") if k in summary}, indent=1))
         return

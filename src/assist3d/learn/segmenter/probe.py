@@ -214,9 +214,14 @@ def _run_row(seed: int, metrics: dict, meta: dict) -> dict:
 
 
 def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", loader_workers: int = 0,
-              hybrid: bool = False, on_event: Callable[[str, dict], None] | None = None) -> dict:
-    """Train and evaluate ``req.seeds`` seeds into ``out_dir``; returns (and writes) the summary. With
-    ``hybrid``, every seed's model is also scored with hybrid inference (the summary's ``hybrid``)."""
+              hybrid: bool = False, first_seed: int = 0,
+              on_event: Callable[[str, dict], None] | None = None) -> dict:
+    """Train and evaluate ``req.seeds`` seeds, ``first_seed`` onwards, into ``out_dir``; returns (and
+    writes) the summary of those seeds. With ``hybrid``, every seed's model is also scored with hybrid
+    inference (the summary's ``hybrid``). ``first_seed`` splits one probe over processes or machines:
+    each writes its own ``seed_K`` folders, and a later call over the whole range reads them all."""
+    if first_seed < 0:
+        raise ConfigError(f"first seed {first_seed}: must be >= 0")
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out {out}: exists and is not a folder")
@@ -225,7 +230,7 @@ def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", lo
     emit = on_event or (lambda kind, info: None)
     scenes: list[Scene] | None = None
     runs = []
-    for seed in range(req.seeds):
+    for seed in range(first_seed, first_seed + req.seeds):
         sdir = out / f"seed_{seed}"
         result_path = sdir / "result.json"
         if result_path.is_file():
