@@ -6,7 +6,7 @@
 # Source it: `. scripts/device_setup.sh`, then run `python3 -m assist3d probe ... --device cuda`.
 set -e
 DATA=${DATA:-/tmp/d}
-if compgen -G ".whl/*.whl" > /dev/null; then
+if [[ ${WHEELS:-1} == 1 ]] && compgen -G ".whl/*.whl" > /dev/null; then
   python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl
   export PYTHONPATH=/tmp/site:$PWD/src
 else
