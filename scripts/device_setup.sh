@@ -3,14 +3,15 @@
 # install the carried wheels (.whl/: pydantic and its needs), unpack the carried real scans
 # (.devdata/real.tar.xz) and every packed training set (.devdata/NAME.npz.xz, scripts/pack_scenes.py)
 # under $DATA (default /tmp/d): $DATA/dev, $DATA/scannet_scene0451_01.npy, $DATA/NAME.
+# SRC (default ./src) names the package source put on PYTHONPATH (e.g. a frozen copy, carried).
 # Source it: `. scripts/device_setup.sh`, then run `python3 -m assist3d probe ... --device cuda`.
 set -e
 DATA=${DATA:-/tmp/d}
 if [[ ${WHEELS:-1} == 1 ]] && compgen -G ".whl/*.whl" > /dev/null; then
   python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl
-  export PYTHONPATH=/tmp/site:$PWD/src
+  export PYTHONPATH=/tmp/site:${SRC:-$PWD/src}
 else
-  export PYTHONPATH=$PWD/src
+  export PYTHONPATH=${SRC:-$PWD/src}
 fi
 export PYTHONUNBUFFERED=1
 mkdir -p "$DATA"
