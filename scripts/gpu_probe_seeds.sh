@@ -9,7 +9,7 @@
 # Runs `scripts/device_setup.sh` (carried wheels and packed data, see there), then one
 # `assist3d probe --seeds 1 --first-seed S --device cuda` process per seed, PARALLEL (default 4) at
 # a time, each into its own folder. Measured on an H200 (docs/fidelity.md, "Speed of the probe on a
-# GPU"): one process runs 821 steps in about 176 s, four at once about 395 s, three about 310 s.
+# GPU"): one process trains 821 steps in 165 s, four at once 376-381 s each, three 309-310 s each.
 # Each seed comes back as $OUT/seedS.tar holding probe.json and seed_S/ (model.pt, result.json,
 # train_log.csv, probe.log): the device tool returns at most 8 files (16 MiB each), so at most 8
 # seeds a call. Here: `for f in FILES_AT/seed*.tar; do tar xf "$f" -C DIR; done` makes DIR a probe
