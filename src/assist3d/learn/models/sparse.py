@@ -226,7 +226,7 @@ class _SubMConvFn(torch.autograd.Function):
             if m is None or m[0].numel() == 0:
                 continue
             in_rows, out_rows = m
-            out.index_add_(0, out_rows, feats[in_rows] @ weight[i])
+            out.index_add_(0, out_rows, feats.index_select(0, in_rows) @ weight[i])
         ctx.save_for_backward(feats, weight)
         ctx.maps = maps
         return out
@@ -250,11 +250,11 @@ class _SubMConvFn(torch.autograd.Function):
             if m is None or m[0].numel() == 0:
                 continue
             in_rows, out_rows = m
-            g = grad_out[out_rows]
+            g = grad_out.index_select(0, out_rows)
             if grad_feats is not None:
                 grad_feats.index_add_(0, in_rows, g @ weight[i].T)
             if grad_w is not None:
-                grad_w[i] = feats[in_rows].T @ g
+                grad_w[i] = feats.index_select(0, in_rows).T @ g
         if grad_w is not None:
             grad_w = grad_w.to(weight_in.dtype)
         return grad_feats, grad_w, None
@@ -274,7 +274,7 @@ class DownConv3d(nn.Module):
         w = self.weight.to(x.feats.dtype)
         # One batched matmul over the 8 octants: (N, C_in) x (C_in, C_out) per row's octant, grouped.
         rows = [torch.nonzero(octant == o).squeeze(1) for o in range(8)]
-        src = torch.cat([x.feats[r] @ w[o] for o, r in enumerate(rows)])
+        src = torch.cat([x.feats.index_select(0, r) @ w[o] for o, r in enumerate(rows)])
         out = src.new_zeros((len(coarse), w.shape[2])).index_add(0, inverse[torch.cat(rows)], src)
         if self.bias is not None:
             out = out + self.bias.to(out.dtype)
@@ -310,7 +310,7 @@ class UpConv3d(nn.Module):
                 out = out + self.bias.to(out.dtype)
             return SparseTensor(feats=out, cset=target.cset, stride=target.stride)
         rows = [torch.nonzero(octant == o).squeeze(1) for o in range(8)]
-        src = torch.cat([x.feats[inverse[r]] @ w[o] for o, r in enumerate(rows)])
+        src = torch.cat([x.feats.index_select(0, inverse[r]) @ w[o] for o, r in enumerate(rows)])
         out = src.new_zeros((len(target.cset), w.shape[2])).index_copy(0, torch.cat(rows), src)
         if self.bias is not None:
             out = out + self.bias.to(out.dtype)
