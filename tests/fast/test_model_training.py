@@ -92,6 +92,21 @@ def test_voxelize_majority_and_inverse():
     assert (majority_label(np.array([0, 0, 1, 1]), np.array([5, 2, 4, 4]), 3) == [2, 4, -1]).all()
 
 
+def test_majority_label_matches_a_per_group_vote_on_random_labels():
+    rng = np.random.default_rng(3)
+    for n, groups, labels in ((500, 40, 5), (2000, 300, 60), (50, 10, 2)):
+        group = rng.integers(0, groups, n)
+        label = rng.integers(-1, labels, n)  # -1: unlabelled points vote too
+        if labels > 50:
+            label[::7] = 2 ** 60  # a label range too wide for one int64 key: the row-wise path
+        got = majority_label(group, label, groups + 3)
+        for g in range(groups + 3):
+            vals, cnt = np.unique(label[group == g], return_counts=True)
+            want = vals[cnt == cnt.max()].min() if len(vals) else -1
+            assert got[g] == want
+    assert (majority_label(np.zeros(0, np.int64), np.zeros(0, np.int64), 2) == [-1, -1]).all()
+
+
 def test_one_training_step_lowers_the_loss():
     cfg = parse_train_config(TINY)
     trainer = Trainer(cfg, MemorySource(_scenes()), steps_total=50)
