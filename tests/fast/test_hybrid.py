@@ -25,7 +25,8 @@ from assist3d.learn.segmenter.hybrid import (  # noqa: E402
 )
 from assist3d.learn.segmenter.infer import instances  # noqa: E402
 from assist3d.learn.segmenter.model import Segmenter  # noqa: E402
-from assist3d.learn.segmenter.superpoints import snap_masks, superpoints  # noqa: E402
+from assist3d.learn.segmenter.superpoints import (  # noqa: E402
+    SuperpointConfig, _graph_segments, _merge_segments, snap_masks, superpoints)
 
 TINY_NET = {"net": {"voxel_size": 0.1, "stem_channels": 8, "enc_channels": [8, 16, 16, 24],
                     "dec_channels": [24, 16, 16, 16]}}
@@ -53,6 +54,67 @@ def test_superpoints_do_not_cross_object_boundaries(room, room_superpoints):
         impure += len(inst) - np.bincount(inst + 1).max()
     assert impure / len(seg) < 0.01, impure
     assert np.array_equal(superpoints(room.coord), seg)  # deterministic
+
+
+def _plain_merge(n, a, b, w, threshold, min_size):
+    """Felzenszwalb-Huttenlocher as the paper states it, every edge through both passes: the reference
+    for the shortcuts of the package's version."""
+    order = np.argsort(w, kind="stable")
+    parent, size, limit = list(range(n)), [1] * n, [threshold] * n
+
+    def find(x):
+        while parent[x] != x:
+            x = parent[x]
+        return x
+
+    for e in order:
+        u, v = find(a[e]), find(b[e])
+        if u != v and w[e] <= limit[u] and w[e] <= limit[v]:
+            if size[u] < size[v]:
+                u, v = v, u
+            parent[v] = u
+            size[u] += size[v]
+            limit[u] = w[e] + threshold / size[u]
+    for e in order:
+        u, v = find(a[e]), find(b[e])
+        if u != v and (size[u] < min_size or size[v] < min_size):
+            if size[u] < size[v]:
+                u, v = v, u
+            parent[v] = u
+            size[u] += size[v]
+    return np.unique([find(x) for x in range(n)], return_inverse=True)[1]
+
+
+def test_segment_merging_equals_the_plain_algorithm():
+    # a merge raises a segment's limit above the threshold, so a heavier edge can still merge later
+    a, b, w = np.array([0, 2, 1]), np.array([1, 3, 2]), np.array([0.009, 0.009, 0.012])
+    assert np.array_equal(_merge_segments(4, a, b, w, 0.01, 1), [0, 0, 0, 0])
+    rng = np.random.default_rng(0)
+    for n, m, min_size in ((60, 150, 1), (300, 900, 5), (500, 1500, 20)):
+        a, b = rng.integers(0, n, m), rng.integers(0, n, m)
+        w = np.round(rng.uniform(0.0, 0.05, m), 3)  # rounded: ties between weights too
+        got = _merge_segments(n, a, b, w, 0.01, min_size)
+        assert np.array_equal(got, _plain_merge(n, a, b, w, 0.01, min_size))
+
+
+def test_graph_segments_of_a_noisy_room_equal_the_plain_algorithm(room):
+    from scipy.spatial import cKDTree
+
+    from assist3d.learn.segmenter.features import neighbourhood_scatter
+
+    cfg = SuperpointConfig()
+    # 1 cm of noise spreads the edge weights (a clean toy room has only parallel or square normals)
+    coord = room.coord[::3] + np.random.default_rng(0).normal(0.0, 0.01, (len(room.coord[::3]), 3))
+    xyz = voxelize(coord, cfg.voxel_size).centres.astype(np.float64)
+    tree = cKDTree(xyz)
+    nrm = np.linalg.eigh(neighbourhood_scatter(xyz, cfg.k_normal, tree))[1][:, :, 0]
+    dist, nn = tree.query(xyz, cfg.k_graph + 1, distance_upper_bound=cfg.max_edge)
+    edges = sorted({(min(i, int(j)), max(i, int(j))) for i in range(len(xyz))
+                    for j, d in zip(nn[i, 1:], dist[i, 1:]) if np.isfinite(d)})
+    a, b = np.array(edges).T
+    w = 1.0 - np.abs(np.einsum("ij,ij->i", nrm[a], nrm[b]))
+    want = _plain_merge(len(xyz), a, b, w, cfg.threshold, cfg.min_size)
+    assert np.array_equal(_graph_segments(xyz, cfg), want)
 
 
 def test_snapping_restores_a_ragged_mask_and_keeps_one_that_covers_no_segment(room, room_superpoints):

@@ -13,7 +13,8 @@ a mask's ragged 5 cm voxel boundary moves to the nearest surface crease, and poi
 left out of a patch it mostly claimed are added. Measured on the dev scans with 28 trained models
 (docs/fidelity.md, "Hybrid inference").
 
-The merge loop is written out in Python (about 1.5 s per 50,000 voxels on one core): the graph
+The merge loop is written out in Python (about 1.5 s per 50,000 voxels on one core before the two
+shortcuts in ``_graph_segments``, which skip only edges that cannot merge): the graph
 segmentation is sequential by nature (each merge changes the next merge's threshold); scikit-image
 implements it for image grids only and no maintained package of our dependency set offers it on an
 arbitrary graph.
@@ -55,18 +56,29 @@ def _graph_segments(xyz: np.ndarray, cfg: SuperpointConfig) -> np.ndarray:
     dst, d = nn[:, 1:].ravel(), dist[:, 1:].ravel()
     ok = np.isfinite(d)
     a, b = np.minimum(src[ok], dst[ok]), np.maximum(src[ok], dst[ok])
-    key = np.unique(a.astype(np.int64) * n + b)
+    key = np.sort(a.astype(np.int64) * n + b)
+    key = key[np.r_[True, key[1:] != key[:-1]]]  # np.unique's values (its hash path is slower here)
     a, b = key // n, key % n
     w = 1.0 - np.abs(np.einsum("ij,ij->i", nrm[a], nrm[b]))
+    return _merge_segments(n, a, b, w, cfg.threshold, cfg.min_size)
+
+
+def _merge_segments(n: int, a: np.ndarray, b: np.ndarray, w: np.ndarray, threshold: float,
+                    min_size: int) -> np.ndarray:
+    """Felzenszwalb-Huttenlocher on the graph of ``n`` nodes and edges ``a``-``b`` of weight ``w``:
+    segment id (0..S-1) of each node."""
     order = np.argsort(w, kind="stable")
     ea, eb, ew = a[order].tolist(), b[order].tolist(), w[order].tolist()
 
     parent = list(range(n))
     size = [1] * n
-    limit = [cfg.threshold] * n  # internal difference + k / size of each root's segment
-    k_thresh = cfg.threshold
+    limit = [threshold] * n  # internal difference + k / size of each root's segment
+    k_thresh = threshold
+    top = threshold  # the largest limit of any segment so far
     # union-find written inline (path halving): the loop runs once per edge, ~8 per voxel
     for u, v, wt in zip(ea, eb, ew):
+        if wt > top:  # edges come in ascending weight and a limit only grows by a merge: none is left
+            break
         while parent[u] != u:
             parent[u] = u = parent[parent[u]]
         while parent[v] != v:
@@ -77,7 +89,13 @@ def _graph_segments(xyz: np.ndarray, cfg: SuperpointConfig) -> np.ndarray:
             parent[v] = u
             size[u] += size[v]
             limit[u] = wt + k_thresh / size[u]
-    min_size = cfg.min_size
+            top = max(top, limit[u])
+    # an edge between two segments of min_size or more never merges (a point's segment only grows):
+    # only the others go through the second pass, in the same order
+    small = np.asarray(size, np.int64)[_roots(parent)] < min_size
+    a_all, b_all = a[order], b[order]
+    sel = small[a_all] | small[b_all]
+    ea, eb = a_all[sel].tolist(), b_all[sel].tolist()
     for u, v in zip(ea, eb):  # small segments join their most similar neighbour
         while parent[u] != u:
             parent[u] = u = parent[parent[u]]
@@ -88,14 +106,17 @@ def _graph_segments(xyz: np.ndarray, cfg: SuperpointConfig) -> np.ndarray:
                 u, v = v, u
             parent[v] = u
             size[u] += size[v]
+    return np.unique(_roots(parent), return_inverse=True)[1].astype(np.int64)
 
-    def find(x: int) -> int:
-        while parent[x] != x:
-            x = parent[x]
-        return x
 
-    roots = np.fromiter((find(x) for x in range(n)), np.int64, n)
-    return np.unique(roots, return_inverse=True)[1].astype(np.int64)
+def _roots(parent: list[int]) -> np.ndarray:
+    """The root of every node of a union-find forest (pointer jumping, vectorised)."""
+    root = np.asarray(parent, np.int64)
+    while True:
+        up = root[root]
+        if np.array_equal(up, root):
+            return root
+        root = up
 
 
 def superpoints(coord: np.ndarray, cfg: SuperpointConfig = SuperpointConfig()) -> np.ndarray:
