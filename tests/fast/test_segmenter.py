@@ -490,6 +490,20 @@ def test_probe_first_seed_splits_a_probe_and_a_full_run_reads_the_parts(tiny_dat
     full = probe(tmp_path / "split", "--seeds", "2")  # trains seed 0, reads seed 1
     assert [same(r) for r in full["runs"]] == [same(r) for r in whole["runs"]]
     assert (tmp_path / "split" / "seed_1" / "model.pt").stat().st_mtime_ns == stamp
+    # --jobs 2: both seeds by processes of their own, at once; the same figures, each seed's log kept
+    jobs = probe(tmp_path / "jobs", "--seeds", "2", "--jobs", "2", "--threads", "1")
+    assert [same(r) for r in jobs["runs"]] == [same(r) for r in whole["runs"]]
+    assert sorted(p.name for p in (tmp_path / "jobs" / "jobs").glob("seed_*.log")) == ["seed_0.log", "seed_1.log"]
+
+
+def test_probe_jobs_name_the_failed_processes_and_their_logs(tmp_path):
+    out = tmp_path / "probe"
+    r = runner.invoke(app, ["probe", "--train", f"assist3d:{tmp_path / 'missing'}", "--eval", "array:x.npy",
+                            "--steps", "2", "--seeds", "2", "--jobs", "2", "--out", str(out)])
+    assert r.exit_code != 0
+    msg = str(r.exception or r.output)
+    assert "2 of 2 probe processes failed" in msg and "seed_1.log" in msg
+    assert "missing" in (out / "jobs" / "seed_0.log").read_text()
 
 
 def test_probe_hybrid_scores_segment_default_and_is_added_to_a_finished_folder(tiny_data, tmp_path):

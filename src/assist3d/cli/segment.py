@@ -58,6 +58,8 @@ def probe_cmd(
     loader_workers: int = typer.Option(0, "--loader-workers", min=0, max=64,
                                        help="processes that build training examples ahead of each step "
                                             "(same batches for any number; 1 helps on 2 cores, more on a GPU machine)"),
+    jobs: int = typer.Option(1, "--jobs", min=1, max=64, help="train up to N seeds at once, each in its own "
+                             "process (for a GPU machine; each process loads its own copy of the training scenes)"),
     hybrid: bool = typer.Option(False, "--hybrid", help="also score hybrid inference (the default of `assist3d "
                                 "segment`) with every seed's model: JSON key 'hybrid' (runs, mean, std); adds "
                                 "it to a finished folder without retraining"),
@@ -68,7 +70,7 @@ def probe_cmd(
     import torch
 
     from ..learn.segmenter.config import parse_segmenter_config
-    from ..learn.segmenter.probe import ProbeRequest, run_probe
+    from ..learn.segmenter.probe import ProbeRequest, run_probe, run_probe_jobs
     from ..learn.engine.train import resolve_device
     from ..learn.segmenter.train import Budget
 
@@ -109,6 +111,11 @@ def probe_cmd(
                 bar.update(task, description=f"eval seed {info['seed']}" + (f" ({info['method']})" if "method" in info
                                                                              else ""),
                            total=info["total"], completed=info["done"], info="")
+            elif kind == "job_start":
+                bar.update(task, description=f"{info['running']} seeds training at once", info=f"seed {info['seed']} started")
+            elif kind == "job_done":
+                bar.update(task, total=info["total"], completed=info["done"],
+                           info=f"seed {info['seed']} " + ("done" if info["returncode"] == 0 else "FAILED"))
             elif kind == "seed_done":
                 h = info.get("hybrid") if hybrid else None
                 console.print(f"seed {info['seed']}: AP {_fmt(info['AP'])}  AP50 {_fmt(info['AP50'])}  "
@@ -117,8 +124,12 @@ def probe_cmd(
                               + f"  ({info['steps']} steps, "
                               f"{info['train_seconds'] / 60:.1f} min{', cached' if info.get('cached') else ''})")
 
-        summary = run_probe(req, out, device=resolve_device(device), loader_workers=loader_workers,
-                            hybrid=hybrid, first_seed=first_seed, on_event=on_event)
+        if jobs > 1:
+            summary = run_probe_jobs(req, out, jobs=jobs, device=resolve_device(device), loader_workers=loader_workers,
+                                     hybrid=hybrid, first_seed=first_seed, threads=threads, on_event=on_event)
+        else:
+            summary = run_probe(req, out, device=resolve_device(device), loader_workers=loader_workers,
+                                hybrid=hybrid, first_seed=first_seed, on_event=on_event)
     if as_json:
         typer.echo(json.dumps({k: summary[k] for k in ("runs", "mean", "std", "hybrid") if k in summary}, indent=1))
         return
