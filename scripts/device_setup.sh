@@ -3,7 +3,7 @@
 # install the carried wheels (.whl/: pydantic and its needs), unpack the carried real scans
 # (.devdata/real.tar.xz) and every packed training set (.devdata/NAME.npz.xz, scripts/pack_scenes.py)
 # under $DATA (default /tmp/d): $DATA/dev, $DATA/scannet_scene0451_01.npy, $DATA/NAME.
-# SRC (default ./src) names the package source put on PYTHONPATH (e.g. a frozen copy, carried).
+# SRC (default $PWD/src) names the package source put on PYTHONPATH (e.g. a frozen copy, carried).
 # Source it: `. scripts/device_setup.sh`, then run `python3 -m assist3d probe ... --device cuda`.
 set -e
 DATA=${DATA:-/tmp/d}

@@ -13,7 +13,8 @@
 # Each seed comes back as $OUT/seedS.tar holding probe.json and seed_S/ (model.pt, result.json,
 # train_log.csv, probe.log): the device tool returns at most 8 files (16 MiB each), so at most 8
 # seeds a call. Here: `for f in FILES_AT/seed*.tar; do tar xf "$f" -C DIR; done` makes DIR a probe
-# folder; `assist3d probe` with the same request and `--out DIR` then reads every seed back.
+# folder; `assist3d probe` with the same request, `--out DIR` and the same seeds (for "1 2 3 4":
+# `--first-seed 1 --seeds 4`) then reads every seed back.
 # DEVICE (default cuda) and EXTRA (more probe options) in the environment allow a dry run on a CPU:
 #   OUT=/tmp/o DEVICE=cpu WHEELS=0 EXTRA="--max-train-scenes 2" bash scripts/gpu_probe_seeds.sh ... 2 "0 1" 2
 set -u
@@ -23,6 +24,9 @@ if (( $# < 4 )); then
 fi
 TRAIN=$1 EVAL=$2 STEPS=$3 SEEDS=$4 PARALLEL=${5:-4} CONFIG=${6:-}
 read -r -a seeds <<< "$SEEDS"
+if ! [[ "$PARALLEL" =~ ^[1-9][0-9]*$ ]]; then
+  echo "PARALLEL must be a positive integer, not '$PARALLEL'" >&2; exit 2
+fi
 if (( ${#seeds[@]} > 8 )); then
   echo "at most 8 seeds a call (the device tool returns at most 8 files)" >&2; exit 2
 fi
@@ -39,10 +43,13 @@ one_seed() {
   echo "seed $s rc=$rc $(( $(date +%s) - t0 )) s $(tail -1 "$dir/seed_$s/train_log.csv" 2>/dev/null | cut -d, -f1,2)"
   cp "$dir.log" "$dir/seed_$s/probe.log" 2>/dev/null
   tar cf "$OUT/seed$s.tar" -C "$dir" probe.json "seed_$s/model.pt" "seed_$s/result.json" \
-    "seed_$s/train_log.csv" "seed_$s/probe.log" 2>/dev/null || echo "seed $s: incomplete, see $dir.log"
+    "seed_$s/train_log.csv" "seed_$s/probe.log" 2>/dev/null || { echo "seed $s: incomplete, see $dir.log"; return 1; }
+  return $rc
 }
 export -f one_seed
 export TRAIN EVAL STEPS PARALLEL CONFIG OUT DEVICE EXTRA
-mkdir -p /tmp/gp
-printf '%s\n' "${seeds[@]}" | xargs -P "$PARALLEL" -I{} bash -c 'one_seed {}'
+mkdir -p /tmp/gp "$OUT"
+rc=0
+printf '%s\n' "${seeds[@]}" | xargs -P "$PARALLEL" -I{} bash -c 'one_seed "$1"' _ {} || rc=1
 ls -la "$OUT"
+exit $rc

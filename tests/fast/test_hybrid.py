@@ -97,6 +97,11 @@ def test_segment_merging_equals_the_plain_algorithm():
         assert np.array_equal(got, _plain_merge(n, a, b, w, 0.01, min_size))
 
 
+def test_superpoints_of_points_too_far_apart_for_any_edge_are_single_points():
+    seg = superpoints(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]], np.float32))
+    assert sorted(seg.tolist()) == [0, 1, 2, 3, 4]
+
+
 def test_graph_segments_of_a_noisy_room_equal_the_plain_algorithm(room):
     from scipy.spatial import cKDTree
 

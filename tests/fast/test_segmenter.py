@@ -4,6 +4,7 @@ safe checkpoints, the probe's JSON contract and resumption, the geometric refere
 from __future__ import annotations
 
 import json
+import os
 import pickle
 from pathlib import Path
 
@@ -19,7 +20,7 @@ from assist3d.cli import app  # noqa: E402
 from assist3d.config import parse_config  # noqa: E402
 from assist3d.bench.data import open_dataset  # noqa: E402
 from assist3d.learn.engine.toy import make_toy_scene  # noqa: E402
-from assist3d.core.errors import ConfigError, DataError  # noqa: E402
+from assist3d.core.errors import ConfigError, DataError, FaultError  # noqa: E402
 from assist3d.bench.evaluation.ap import match_scene, summarize  # noqa: E402
 from assist3d.learn.models.sparse import SparseSceneNorm, sparse_tensor  # noqa: E402
 from assist3d.pipeline import generate_dataset  # noqa: E402
@@ -494,6 +495,18 @@ def test_probe_first_seed_splits_a_probe_and_a_full_run_reads_the_parts(tiny_dat
     jobs = probe(tmp_path / "jobs", "--seeds", "2", "--jobs", "2", "--threads", "1")
     assert [same(r) for r in jobs["runs"]] == [same(r) for r in whole["runs"]]
     assert sorted(p.name for p in (tmp_path / "jobs" / "jobs").glob("seed_*.log")) == ["seed_0.log", "seed_1.log"]
+
+
+def test_probe_jobs_need_a_step_budget_and_a_seed_process_stops_without_its_parent(tmp_path, monkeypatch):
+    from assist3d.learn.segmenter.probe import PARENT_ENV, die_with_parent
+
+    r = runner.invoke(app, ["probe", "--train", "array:x", "--eval", "array:y", "--minutes", "1", "--seeds", "2",
+                            "--jobs", "2", "--out", str(tmp_path / "p")])
+    assert r.exit_code != 0 and "--jobs needs a budget in --steps" in str(r.exception or r.output)
+    die_with_parent()  # not started by --jobs: nothing happens
+    monkeypatch.setenv(PARENT_ENV, str(os.getppid() + 1_000_000))
+    with pytest.raises(FaultError, match="is gone"):
+        die_with_parent()
 
 
 def test_probe_jobs_name_the_failed_processes_and_their_logs(tmp_path):

@@ -45,7 +45,7 @@ def probe_cmd(
     minutes: Optional[float] = typer.Option(None, "--minutes", help="training budget per seed in minutes"),
     steps: Optional[int] = typer.Option(None, "--steps", help="training budget per seed in steps (deterministic)"),
     seeds: int = typer.Option(1, "--seeds", min=1, max=100, help="repeat with seeds 0..K-1; report mean and std"),
-    first_seed: int = typer.Option(0, "--first-seed", min=0, max=10_000,
+    first_seed: int = typer.Option(0, "--first-seed", min=0,
                                    help="start the seeds at S (seeds S..S+K-1): to split one probe over "
                                         "processes or machines, each writing its seed_K folders"),
     out: Path = typer.Option(Path("probe_out"), "--out", "-o", help="resumable output folder"),
@@ -70,10 +70,11 @@ def probe_cmd(
     import torch
 
     from ..learn.segmenter.config import parse_segmenter_config
-    from ..learn.segmenter.probe import ProbeRequest, run_probe, run_probe_jobs
+    from ..learn.segmenter.probe import ProbeRequest, die_with_parent, run_probe, run_probe_jobs
     from ..learn.engine.train import resolve_device
     from ..learn.segmenter.train import Budget
 
+    die_with_parent()  # a seed process of --jobs: stops with the probe that started it
     if minutes is None and steps is None:
         minutes = 50.0
     cfg_data: dict = {}

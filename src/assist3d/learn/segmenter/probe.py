@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import subprocess
 import sys
 import time
@@ -39,9 +40,11 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
+import yaml
 
 from ...bench.data import open_dataset
-from ...core.errors import ConfigError, DataError
+from ...core.errors import ConfigError, DataError, FaultError
+from ...core.interrupts import set_parent_death_signal
 from ...bench.evaluation.ap import METRIC_KEYS, SceneMatches, match_scene, summarize
 from ...bench.evaluation.predictions import save_predictions
 from ...core.fileio import write_json_atomic, write_text_atomic
@@ -57,6 +60,8 @@ from .train import Budget, train_segmenter
 log = logging.getLogger(__name__)
 
 RUN_KEYS: tuple[str, ...] = ("AP", "AP50", "AP25", "AR")
+#: set by ``run_probe_jobs`` in each child's environment: the pid of the process that started it
+PARENT_ENV = "ASSIST3D_PROBE_PARENT"
 BOOTSTRAP_DRAWS = 1000
 METHODS: tuple[str, ...] = ("learned", "hybrid", "geometric")
 
@@ -268,8 +273,22 @@ def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", lo
     if runs and all(isinstance(r.get("hybrid"), dict) and _current(r["hybrid"].get("inference")) for r in runs):
         summary["hybrid"] = summarise_runs([r["hybrid"] for r in runs])
     summary["request"] = req.as_dict()
+    summary["seeds_run"] = [first_seed, first_seed + req.seeds - 1]  # the range this summary covers
     write_json_atomic(out / "summary.json", summary)
     return summary
+
+
+def die_with_parent() -> None:
+    """In a process started by ``run_probe_jobs``: be killed when that process dies (Linux), and stop now
+    if it is already gone, so that no orphaned seed keeps training into its folder."""
+    parent = os.environ.get(PARENT_ENV)
+    if parent is None:
+        return
+    if str(os.getppid()) != parent:
+        raise FaultError(f"the probe process {parent} that started this seed is gone; stopping")
+    set_parent_death_signal()
+    if str(os.getppid()) != parent:  # it died between the check and the call
+        raise FaultError(f"the probe process {parent} that started this seed is gone; stopping")
 
 
 def run_probe_jobs(req: ProbeRequest, out_dir: str | Path, *, jobs: int, device: str = "cpu",
@@ -282,6 +301,9 @@ def run_probe_jobs(req: ProbeRequest, out_dir: str | Path, *, jobs: int, device:
     CPU the processes share the cores. Each process holds its own copy of the training scenes."""
     if jobs < 1:
         raise ConfigError(f"--jobs {jobs}: must be at least 1")
+    if req.budget.steps is None:
+        raise ConfigError("--jobs needs a budget in --steps: processes that share the machine would each train "
+                          "fewer steps in the same minutes than one alone")
     if first_seed < 0:
         raise ConfigError(f"first seed {first_seed}: must be >= 0")
     out = Path(out_dir)
@@ -294,46 +316,48 @@ def run_probe_jobs(req: ProbeRequest, out_dir: str | Path, *, jobs: int, device:
     todo = [s for s in seeds if not (out / f"seed_{s}" / "result.json").is_file()]
     logs = out / "jobs"
     logs.mkdir(exist_ok=True)
-    cfg_path = logs / "config.json"  # JSON is YAML: the child reads it with --config
-    write_text_atomic(cfg_path, json.dumps(req.config.model_dump(mode="json"), indent=1))
-    budget = (["--steps", str(req.budget.steps)] if req.budget.steps is not None
-              else ["--minutes", repr(req.budget.minutes)])
-    base = [sys.executable, "-m", "assist3d", "probe",
-            *[a for t in req.train for a in ("--train", t)], *[a for e in req.eval for a in ("--eval", e)],
-            *budget, "--out", str(out), "--config", str(cfg_path), "--max-train-scenes", str(req.max_train_scenes),
-            "--threads", str(threads), "--device", device, "--loader-workers", str(loader_workers), "--json",
-            *(["--hybrid"] if hybrid else [])]
-    pending, running, failed = list(todo), {}, []
+    cfg_path = logs / "config.yaml"
+    write_text_atomic(cfg_path, yaml.safe_dump(req.config.model_dump(mode="json"), sort_keys=False))
+    if threads == 0:  # "all cores" for each of the processes would oversubscribe them
+        threads = max(1, (os.cpu_count() or 1) // jobs)
+    base = [sys.executable, "-m", "assist3d", "probe", *[f"--train={t}" for t in req.train],
+            *[f"--eval={e}" for e in req.eval], f"--steps={req.budget.steps}", f"--out={out}", f"--config={cfg_path}",
+            f"--max-train-scenes={req.max_train_scenes}", f"--threads={threads}", f"--device={device}",
+            f"--loader-workers={loader_workers}", "--json", *(["--hybrid"] if hybrid else [])]
+    child_env = {**os.environ, PARENT_ENV: str(os.getpid())}  # the child stops if this process dies
+    pending, running, failed = list(todo), {}, {}
     try:
         while pending or running:
             while pending and len(running) < jobs:
                 seed = pending.pop(0)
-                log = open(logs / f"seed_{seed}.log", "w")
-                running[seed] = (subprocess.Popen([*base, "--seeds", "1", "--first-seed", str(seed)], stdout=log,
-                                                  stderr=subprocess.STDOUT), log)
+                with open(logs / f"seed_{seed}.log", "w") as log:  # the child keeps its own descriptor
+                    proc = subprocess.Popen([*base, "--seeds=1", f"--first-seed={seed}"], stdin=subprocess.DEVNULL,
+                                            stdout=log, stderr=subprocess.STDOUT, env=child_env)
+                running[seed] = proc
                 emit("job_start", {"seed": seed, "running": len(running), "total": len(todo)})
             time.sleep(0.2)
-            for seed, (proc, log) in list(running.items()):
+            for seed, proc in list(running.items()):
                 if proc.poll() is None:
                     continue
-                log.close()
                 del running[seed]
                 if proc.returncode != 0:
-                    failed.append(seed)
+                    failed[seed] = proc.returncode
                 emit("job_done", {"seed": seed, "returncode": proc.returncode,
                                   "done": len(todo) - len(pending) - len(running), "total": len(todo)})
-    finally:  # interrupted or failed: stop the others (a stopped seed resumes from its last.pt)
-        for proc, log in running.values():
+    finally:  # interrupted here: stop the running processes (a stopped seed resumes from its last.pt)
+        for proc in running.values():
             proc.terminate()
-        for proc, log in running.values():
+        for proc in running.values():
             try:
                 proc.wait(timeout=30)
             except subprocess.TimeoutExpired:
                 proc.kill()
-            log.close()
+                proc.wait()
     if failed:
-        names = ", ".join(f"seed {s} ({logs / f'seed_{s}.log'})" for s in sorted(failed))
-        raise DataError(f"{len(failed)} of {len(todo)} probe processes failed: {names}; the finished seeds are kept")
+        names = ", ".join(f"seed {s} (exit {rc}, {logs / f'seed_{s}.log'})" for s, rc in sorted(failed.items()))
+        msg = f"{len(failed)} of {len(todo)} probe processes failed: {names}; the finished seeds are kept"
+        # exit status 2 is a refused input in every child: say so; anything else is a fault of the run
+        raise (DataError if set(failed.values()) == {2} else FaultError)(msg)
     return run_probe(req, out, device=device, loader_workers=loader_workers, hybrid=hybrid,
                      first_seed=first_seed, on_event=on_event)
 

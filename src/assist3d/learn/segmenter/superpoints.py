@@ -57,7 +57,9 @@ def _graph_segments(xyz: np.ndarray, cfg: SuperpointConfig) -> np.ndarray:
     ok = np.isfinite(d)
     a, b = np.minimum(src[ok], dst[ok]), np.maximum(src[ok], dst[ok])
     key = np.sort(a.astype(np.int64) * n + b)
-    key = key[np.r_[True, key[1:] != key[:-1]]]  # np.unique's values (its hash path is slower here)
+    first = np.ones(len(key), bool)  # np.unique's values (its hash path is slower here)
+    first[1:] = key[1:] != key[:-1]
+    key = key[first]
     a, b = key // n, key % n
     w = 1.0 - np.abs(np.einsum("ij,ij->i", nrm[a], nrm[b]))
     return _merge_segments(n, a, b, w, cfg.threshold, cfg.min_size)
