@@ -181,6 +181,18 @@ def evaluate_model(model_path: Path, eval_specs: Sequence[str], pred_dir: Path, 
             "per_scene": per_scene}
 
 
+def _open_out(out_dir: str | Path, req: ProbeRequest, first_seed: int) -> Path:
+    """The probe folder for ``req``, created, with ``req`` recorded or checked against the one it holds."""
+    if first_seed < 0:
+        raise ConfigError(f"first seed {first_seed}: must be >= 0")
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out {out}: exists and is not a folder")
+    out.mkdir(parents=True, exist_ok=True)
+    _check_request(out, req)
+    return out
+
+
 def _check_request(out: Path, req: ProbeRequest) -> None:
     path = out / "probe.json"
     mine = req.as_dict()
@@ -227,13 +239,7 @@ def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", lo
     writes) the summary of those seeds. With ``hybrid``, every seed's model is also scored with hybrid
     inference (the summary's ``hybrid``). ``first_seed`` splits one probe over processes or machines:
     each writes its own ``seed_K`` folders, and a later call over the whole range reads them all."""
-    if first_seed < 0:
-        raise ConfigError(f"first seed {first_seed}: must be >= 0")
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise ConfigError(f"--out {out}: exists and is not a folder")
-    out.mkdir(parents=True, exist_ok=True)
-    _check_request(out, req)
+    out = _open_out(out_dir, req, first_seed)
     emit = on_event or (lambda kind, info: None)
     scenes: list[Scene] | None = None
     runs = []
@@ -304,13 +310,7 @@ def run_probe_jobs(req: ProbeRequest, out_dir: str | Path, *, jobs: int, device:
     if req.budget.steps is None:
         raise ConfigError("--jobs needs a budget in --steps: processes that share the machine would each train "
                           "fewer steps in the same minutes than one alone")
-    if first_seed < 0:
-        raise ConfigError(f"first seed {first_seed}: must be >= 0")
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise ConfigError(f"--out {out}: exists and is not a folder")
-    out.mkdir(parents=True, exist_ok=True)
-    _check_request(out, req)
+    out = _open_out(out_dir, req, first_seed)
     emit = on_event or (lambda kind, info: None)
     seeds = range(first_seed, first_seed + req.seeds)
     todo = [s for s in seeds if not (out / f"seed_{s}" / "result.json").is_file()]
