@@ -77,3 +77,22 @@ def test_room_template_classes_exist_in_their_groups_of_the_procedural_library()
             missing = [n for n in names if n not in keys[group]]
             assert missing == [], (room, group, missing)
     assert len(set(HOUSEHOLD_CLASSES)) == len(HOUSEHOLD_CLASSES)
+
+
+def test_the_household_sparse_config_is_the_measured_one_and_keeps_the_template_classes():
+    """configs/household-sparse.yaml (documented for users) must stay the file the fidelity runs used and
+    list exactly the room templates' classes, so a change to the templates cannot silently leave it behind."""
+    from pathlib import Path
+
+    from assist3d.config.presets import compose
+
+    root = Path(__file__).resolve().parents[2]
+    shipped = root / "configs" / "household-sparse.yaml"
+    measured = root / "docs" / "results" / "holodeck-why-2026-11-28" / "household-sparse.yaml"
+    for preset in ("assist3d", "mesh-sampled"):
+        a, b = compose(shipped, preset), compose(measured, preset)
+        assert a.model_dump() == b.model_dump()
+        assert sorted(a.selection.allowed_classes) == sorted(HOUSEHOLD_CLASSES)
+        assert (a.selection.floor_count, a.selection.wall_count, a.selection.on_top_count) == (15, 8, 2)
+        rest = a.model_dump(exclude={"selection"})
+        assert rest == compose(None, preset).model_dump(exclude={"selection"})
