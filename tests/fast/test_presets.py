@@ -3,12 +3,14 @@ change what they claim to change, and the Holodeck-style room templates name rea
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from assist3d.config import GenerateConfig
 from assist3d.core.errors import ConfigError
-from assist3d.config.presets import HOUSEHOLD_CLASSES, PRESETS, apply_preset, preset_overrides
+from assist3d.config.presets import HOUSEHOLD_CLASSES, PRESETS, apply_preset, compose, preset_overrides
 
 
 @pytest.mark.parametrize("name", sorted(PRESETS))
@@ -82,10 +84,6 @@ def test_room_template_classes_exist_in_their_groups_of_the_procedural_library()
 def test_the_household_sparse_config_is_the_measured_one_and_keeps_the_template_classes():
     """configs/household-sparse.yaml (documented for users) must stay the file the fidelity runs used and
     list exactly the room templates' classes, so a change to the templates cannot silently leave it behind."""
-    from pathlib import Path
-
-    from assist3d.config.presets import compose
-
     root = Path(__file__).resolve().parents[2]
     shipped = root / "configs" / "household-sparse.yaml"
     measured = root / "docs" / "results" / "holodeck-why-2026-11-28" / "household-sparse.yaml"
