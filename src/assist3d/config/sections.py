@@ -243,6 +243,10 @@ class LLMConfig(Section):
                                                       "`concurrency` requests) once its floor and wall objects are "
                                                       "placed; false = one group after another. The same answers "
                                                       "give the same layout either way.")
+    on_top_batch: int = Field(1, ge=1, le=64, description="On-top groups asked for in one prompt: 1 = one prompt per "
+                                                          "group; N > 1 = a scene's on-top groups N at a time (each "
+                                                          "group's answer checked, repaired and, failing that, planned "
+                                                          "by the rules on its own); at most 64.")
     scene_budget_s: float | None = Field(None, gt=0, le=86400, description="LLM planning time per scene, s: groups "
                                          "whose planning starts later are planned by the rules (recorded in "
                                          "layout.json); None = no limit; at most 86400.")

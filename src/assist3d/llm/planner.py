@@ -17,6 +17,11 @@
 
 ``GroupPlan.stats``: llm_calls, cache_hits, repairs, prompt_tokens, completion_tokens, seconds
 (``llm_seconds`` holds the same number under the layout summary's name).
+
+``plan_batch`` asks for several on-top groups of a scene in one prompt (``llm.on_top_batch``):
+each group's part of the answer goes through steps 2-4 on its own (one repair round for the whole
+batch, listing every group's problems), so one bad group falls back to the rules without taking
+the others with it.
 """
 
 from __future__ import annotations
@@ -34,9 +39,9 @@ from ..planning.relations import CROSS_GROUP, GroupPlan, PlannedObject, Planner,
 from ..core.taxonomy.roomtypes import RoomTemplate
 from .cache import ResponseCache
 from .client import ChatAnswer, ChatClient, Usage
-from .prompts import render_plan_messages, render_repair_message
+from .prompts import render_batch_messages, render_plan_messages, render_repair_message
 from .rooms import check_room_answer, room_messages
-from .schema import CheckedAnswer, check_answer, parse_json_text, salvage_objects
+from .schema import CheckedAnswer, check_answer, parse_json_text, salvage_groups, salvage_objects, split_batch_answer
 
 log = logging.getLogger(__name__)
 
@@ -92,11 +97,83 @@ class LLMPlanner:
             if not checked.order:
                 raise LLMError("the answer lists none of the objects")
         except LLMError as e:
-            reason = f"LLM failed for group {request.group}: {e}; the rule planner took over"
-            log.warning("%s", inert(reason))
-            plan = self.fallback.plan(request, rng=rng)
-            return self._with_stats(plan, usage, repairs, (reason, *plan.notes), t0)
+            return self._fell_back(request, e, rng, usage, repairs, t0)
+        plan, notes = self._finish(request, checked, problems, extra_notes, rng)
+        return self._with_stats(plan, usage, repairs, notes, t0)
 
+    def plan_batch(self, requests: list[PlanRequest] | tuple[PlanRequest, ...], *,
+                   rngs: list[np.random.Generator]) -> list[GroupPlan]:
+        """The plans of several on-top groups of one scene from one chat completion, in
+        ``requests`` order; ``rngs[i]`` is group i's stream (used only where the fallback planner
+        plans). Each group's answer is checked on its own; every group's problems go back in one
+        repair round, and a group that had none keeps its first answer. A group without a usable
+        answer after the repair is planned by the fallback planner, with the reason in its notes;
+        when the request itself fails, every group is. The batch's counters (calls, cache hits,
+        repairs, tokens, seconds) are on the first plan's stats and zero on the others, so sums
+        over a layout's groups stay right."""
+        requests = list(requests)
+        if len(requests) != len(rngs):
+            raise ValueError("plan_batch needs one random stream per request")
+        if len(requests) == 1:
+            return [self.plan(requests[0], rng=rngs[0])]
+        usage = Usage()
+        t0 = time.monotonic()
+        repairs = 0
+        extra_notes: list[list[str]] = [[] for _ in requests]
+        try:
+            messages = render_batch_messages(requests, self.cfg.prompt_dir)
+            first = self.client.complete(messages, usage=usage)
+            results, general = _check_batch(first, requests)
+            if any(problems for _, problems in results):  # a problem of the whole answer alone costs no repair
+                repairs = 1
+                listed = general + [f"group {r.group}: {p}" for r, (_, ps) in zip(requests, results) for p in ps]
+                log.info("%s batch of %d groups: %d problem(s) in the answer; asking for a repair: %s", self.name,
+                         len(requests), len(listed), inert("; ".join(listed[:5])))
+                repair_messages = messages + [
+                    {"role": "assistant", "content": first.content},
+                    {"role": "user", "content": render_repair_message(listed, self.cfg.prompt_dir)},
+                ]
+                try:
+                    second = self.client.complete(repair_messages, usage=usage)
+                    results2, _ = _check_batch(second, requests)
+                except LLMError as e:
+                    if all(checked is None for checked, _ in results):
+                        raise
+                    results2 = [(None, [f"the repair request failed ({e})"]) for _ in requests]
+                for i, ((c1, p1), (c2, p2)) in enumerate(zip(results, results2)):
+                    if not p1:
+                        continue  # nothing wrong with this group's first answer
+                    if c2 is not None:
+                        results[i] = (c2, p2)
+                    elif c1 is not None:
+                        kept = f"repair answer unusable ({'; '.join(p2[:2])}); kept the first answer"
+                        log.warning("%s %s: %s", self.name, requests[i].group, inert(kept))
+                        extra_notes[i].append(kept)
+                    else:
+                        results[i] = (None, p2 or p1)
+        except LLMError as e:
+            plans = [self._fell_back(r, e, g, usage if i == 0 else Usage(), repairs if i == 0 else 0, t0)
+                     for i, (r, g) in enumerate(zip(requests, rngs))]
+            return plans
+        plans = []
+        for i, (request, rng, (checked, problems)) in enumerate(zip(requests, rngs, results)):
+            mine, mine_repairs = (usage, repairs) if i == 0 else (Usage(), 0)
+            try:
+                plan, notes = self._finish(request, checked, problems, extra_notes[i], rng)
+            except LLMError as e:
+                plans.append(self._fell_back(request, e, rng, mine, mine_repairs, t0))
+                continue
+            plans.append(self._with_stats(plan, mine, mine_repairs, notes, t0))
+        return plans
+
+    def _finish(self, request: PlanRequest, checked: CheckedAnswer | None, problems: list[str],
+                extra_notes: list[str], rng: np.random.Generator) -> tuple[GroupPlan, tuple[str, ...]]:
+        """The group's plan and notes from its checked answer (missing objects appended in the
+        fallback planner's order); raises LLMError when the answer has nothing usable."""
+        if checked is None:
+            raise LLMError(f"no usable answer after one repair round ({'; '.join(problems[:3])})")
+        if not checked.order:
+            raise LLMError("the answer lists none of the objects")
         notes = extra_notes + [f"dropped: {p}" for p in problems if not p.startswith("objects never listed")]
         for n in notes:
             log.info("%s %s: %s", self.name, request.group, inert(n))
@@ -110,8 +187,15 @@ class LLMPlanner:
             reason = f"LLM plan for group {request.group} failed validation ({'; '.join(bad[:3])}); rules took over"
             log.error("%s", inert(reason))
             fb = self.fallback.plan(request, rng=rng)
-            return self._with_stats(fb, usage, repairs, (reason, *fb.notes), t0)
-        return self._with_stats(plan, usage, repairs, plan.notes, t0)
+            return fb, (reason, *fb.notes)
+        return plan, plan.notes
+
+    def _fell_back(self, request: PlanRequest, error: LLMError, rng: np.random.Generator, usage: Usage,
+                   repairs: int, t0: float) -> GroupPlan:
+        reason = f"LLM failed for group {request.group}: {error}; the rule planner took over"
+        log.warning("%s", inert(reason))
+        plan = self.fallback.plan(request, rng=rng)
+        return self._with_stats(plan, usage, repairs, (reason, *plan.notes), t0)
 
     def propose_room(self, room_type: str, room: Room,
                      vocab: dict[str, tuple[str, ...]]) -> tuple[RoomTemplate | None, dict]:
@@ -166,6 +250,31 @@ def _check(answer: ChatAnswer, request: PlanRequest) -> tuple[CheckedAnswer | No
     if not checked.usable:
         return None, [*cut, *checked.problems]
     return checked, [*cut, *checked.problems]
+
+
+def _check_batch(answer: ChatAnswer, requests: list[PlanRequest]
+                 ) -> tuple[list[tuple[CheckedAnswer | None, list[str]]], list[str]]:
+    """Each group's usable part and problems in a batch answer (in ``requests`` order), and the
+    problems of the answer as a whole."""
+    general = (["the answer was cut off at the token limit; answer more briefly (at most 2 relations per object)"]
+               if answer.finish_reason == "length" else [])
+    names = [r.group for r in requests]
+    data, err = parse_json_text(answer.content)
+    if err is not None:
+        entries = salvage_groups(answer.content)
+        general.append(err if not entries else f"{err}; only the first {len(entries)} complete groups could be read")
+        data = {"groups": entries}
+    found, shape = split_batch_answer(data, names)
+    general.extend(shape)
+    results: list[tuple[CheckedAnswer | None, list[str]]] = []
+    for request in requests:
+        item = found.get(request.group)
+        if item is None:
+            results.append((None, [f"group {request.group} is missing from the answer; answer every group"]))
+            continue
+        checked = check_answer(item, request)
+        results.append((checked if checked.usable else None, list(checked.problems)))
+    return results, general
 
 
 def _append_missing(order: list[PlannedObject], missing: tuple[int, ...], request: PlanRequest,

@@ -1,7 +1,8 @@
 """Prompt templates: editable data files rendered into chat messages.
 
 Templates live in ``assist3d/resources/prompts/`` (``floor.txt``, ``wall.txt``, ``on_top.txt``,
-``vlm_score.txt``, ``repair.txt``, ``room_objects.txt``); ``llm.prompt_dir`` may name a folder whose files override the
+``on_top_batch.txt``, ``vlm_score.txt``, ``repair.txt``, ``room_objects.txt``); ``llm.prompt_dir`` may name a
+folder whose files override the
 built-in ones file by file. A template holds a ``### system`` and a ``### user`` section (lines
 before the first section marker are comments for the editor) and ``$name`` template fields filled
 with :class:`string.Template` (write ``$$`` for a literal dollar sign):
@@ -9,7 +10,10 @@ with :class:`string.Template` (write ``$$`` for a literal dollar sign):
 ``$group`` the group name, ``$relations`` the relation vocabulary allowed in the group,
 ``$objects`` the numbered object list with names and sizes, ``$count`` the number of objects,
 ``$room`` the room description, ``$placed`` the already-placed instances the group may refer to,
-``$support`` the supporting instance (on-top groups); ``repair.txt`` gets ``$problems``.
+``$support`` the supporting instance (on-top groups); ``repair.txt`` gets ``$problems``;
+``on_top_batch.txt`` (several on-top groups in one prompt, ``llm.on_top_batch``) gets ``$room``,
+``$relations``, ``$count`` (the number of groups) and ``$groups`` (one block per group: its name,
+support and numbered objects).
 """
 
 from __future__ import annotations
@@ -25,8 +29,8 @@ from ..core.contracts import PlacedInstance, Room
 from ..core.errors import ConfigError
 from ..planning.relations import CROSS_GROUP, RELATIONS, PlanRequest, group_kind
 
-TEMPLATE_FILES = {"floor": "floor.txt", "wall": "wall.txt", "on": "on_top.txt", "vlm": "vlm_score.txt",
-                  "repair": "repair.txt", "room": "room_objects.txt"}
+TEMPLATE_FILES = {"floor": "floor.txt", "wall": "wall.txt", "on": "on_top.txt", "on_batch": "on_top_batch.txt",
+                  "vlm": "vlm_score.txt", "repair": "repair.txt", "room": "room_objects.txt"}
 _NAME_MAX = 60
 
 
@@ -151,6 +155,26 @@ def render_plan_messages(request: PlanRequest, prompt_dir: str | Path | None = N
     """System and user messages asking for the relations of ``request``'s group."""
     kind = group_kind(request.group)
     system, user = load_template(kind, prompt_dir).render(request_values(request))
+    messages = [{"role": "system", "content": system}] if system else []
+    return messages + [{"role": "user", "content": user}]
+
+
+def describe_group_block(request: PlanRequest) -> str:
+    """One on-top group of a batch prompt: its name, its support and its numbered objects."""
+    support = _describe_instance(request.support) if request.support is not None else "(none)"
+    return (f'Group "{request.group}", support {support}\n'
+            f"Objects of {request.group} ({len(request.objects)}), numbered:\n{describe_objects(request)}")
+
+
+def render_batch_messages(requests: list[PlanRequest] | tuple[PlanRequest, ...],
+                          prompt_dir: str | Path | None = None) -> list[dict[str, str]]:
+    """System and user messages asking for the relations of several on-top groups of one scene
+    (``llm.on_top_batch``); every request must be an on-top group of the same room."""
+    if not requests or any(group_kind(r.group) != "on" for r in requests):
+        raise ValueError("a batch prompt holds one or more on-top groups and nothing else")
+    values = {"room": describe_room(requests[0].room), "relations": describe_relations("on"),
+              "count": str(len(requests)), "groups": "\n\n".join(describe_group_block(r) for r in requests)}
+    system, user = load_template("on_batch", prompt_dir).render(values)
     messages = [{"role": "system", "content": system}] if system else []
     return messages + [{"role": "user", "content": user}]
 

@@ -11,6 +11,10 @@ Answer format (one object per line of the group's object list, in placement orde
 *earlier in the answer*, except for ``above`` / ``on`` whose target is the id of an already-placed
 instance; ``height`` takes ``"value": [min_m, max_m]``; ``"hard": true|false`` is optional.
 
+Several on-top groups asked for in one prompt (``llm.on_top_batch``) are answered as
+``{"groups": [{"group": "on:7", "objects": [...]}, ...]}`` and each group's entry is checked as
+above (:func:`split_batch_answer`).
+
 Nothing is guessed: an unknown relation name is reported, never mapped to a close one. The
 answer text is parsed with ``json.loads`` only (a Markdown code fence around it is tolerated).
 """
@@ -81,13 +85,17 @@ def parse_json_text(text: str) -> tuple[Any | None, str | None]:
         return None, f"the answer is not valid JSON ({e.msg} at line {e.lineno} column {e.colno})"
 
 
-_OBJECTS_KEY = re.compile(r'"objects"\s*:\s*\[')
+def _list_key(key: str) -> re.Pattern[str]:
+    return re.compile(r'"' + re.escape(key) + r'"\s*:\s*\[')
 
 
-def salvage_objects(text: str) -> list[Any]:
-    """The complete entries at the start of the ``"objects"`` list of a broken answer (typically
-    one cut off at the token limit); empty when there are none. Decoded with ``raw_decode`` only."""
-    m = _OBJECTS_KEY.search(text)
+_OBJECTS_KEY = _list_key("objects")
+_GROUPS_KEY = _list_key("groups")
+
+
+def _salvage_list(text: str, key: re.Pattern[str]) -> list[Any]:
+    """The complete entries at the start of the list under ``key`` in a broken answer."""
+    m = key.search(text)
     if m is None:
         return []
     dec = json.JSONDecoder()
@@ -103,6 +111,49 @@ def salvage_objects(text: str) -> list[Any]:
         except json.JSONDecodeError:
             return items
         items.append(item)
+
+
+def salvage_objects(text: str) -> list[Any]:
+    """The complete entries at the start of the ``"objects"`` list of a broken answer (typically
+    one cut off at the token limit); empty when there are none. Decoded with ``raw_decode`` only."""
+    return _salvage_list(text, _OBJECTS_KEY)
+
+
+def salvage_groups(text: str) -> list[Any]:
+    """The complete group entries at the start of the ``"groups"`` list of a broken batch answer."""
+    return _salvage_list(text, _GROUPS_KEY)
+
+
+def split_batch_answer(data: Any, groups: list[str] | tuple[str, ...]) -> tuple[dict[str, Any], list[str]]:
+    """The answer of each group of a batch answer, by group name, and the problems of its shape.
+
+    A batch answer is ``{"groups": [{"group": "on:7", "objects": [...]}, ...]}`` (a list of such
+    entries, or ``{"groups": {"on:7": {"objects": [...]}}}``, are read too). A group answered twice
+    keeps its first answer; groups not asked for are reported; groups not answered are simply
+    absent from the result (the caller reports them)."""
+    if isinstance(data, dict) and isinstance(data.get("groups"), dict):
+        items: Any = [{"group": k, **(v if isinstance(v, dict) else {"objects": v})} for k, v in data["groups"].items()]
+    elif isinstance(data, dict) and isinstance(data.get("groups"), list):
+        items = data["groups"]
+    elif isinstance(data, list):
+        items = data
+    else:
+        return {}, ['the answer must be a JSON object {"groups": [{"group": <name>, "objects": [...]}, ...]}']
+    asked = set(groups)
+    found: dict[str, Any] = {}
+    problems: list[str] = []
+    for k, item in enumerate(items):
+        if not isinstance(item, dict) or not isinstance(item.get("group"), str):
+            problems.append(f'entry {k} of "groups": expected {{"group": <name>, "objects": [...]}}')
+            continue
+        g = item["group"]
+        if g not in asked:
+            problems.append(f"group {g[:40]!r} was not asked for; answer only: {', '.join(groups)}")
+        elif g in found:
+            problems.append(f"group {g} is answered more than once; answer each group once")
+        else:
+            found[g] = item
+    return found, problems
 
 
 @dataclass(frozen=True)

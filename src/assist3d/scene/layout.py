@@ -10,7 +10,8 @@
    plan depends only on its objects, the room and its support, so with an LLM planner every on-top
    group of the scene is planned at once (``llm.concurrency`` requests, ``llm.plan_concurrently``)
    before they are placed one after another in the usual order: the same answers give the same
-   layout whatever order they arrive in. ``llm.scene_budget_s`` bounds a scene's planning time:
+   layout whatever order they arrive in; with ``llm.on_top_batch`` > 1 they are asked for that many
+   to a prompt. ``llm.scene_budget_s`` bounds a scene's planning time:
    a group whose planning starts after it is planned by the rules, with a note.
 
 Nothing here raises for an impossible scene: plans with unknown relations, targets or duplicate
@@ -123,13 +124,38 @@ class _Run:
             note = f"{request.group}: planner {self.planner.name} failed ({e}); rule-based plan used"
             return _Planned(RulePlanner().plan(request, rng=rng), (note,), False)
 
+    def plan_batch_ahead(self, requests: list[PlanRequest]) -> dict[str, _Planned]:
+        """Plan several on-top groups with one prompt (``llm.on_top_batch``), like :meth:`plan_ahead`."""
+        rngs = [make_rng(self.seed, "plan", r.group) for r in requests]
+        if self.deadline is not None and time.monotonic() >= self.deadline:
+            return {r.group: _Planned(RulePlanner().plan(r, rng=g),
+                                      (f"{r.group}: the scene's LLM planning budget ({self.budget_s:g} s) was "
+                                       f"spent; rule-based plan used",), True) for r, g in zip(requests, rngs)}
+        try:
+            plans = self.planner.plan_batch(requests, rngs=rngs)  # type: ignore[attr-defined]
+            return {p.group: _Planned(p, (), False) for p in plans}
+        except AssistError as e:
+            rngs = [make_rng(self.seed, "plan", r.group) for r in requests]  # fresh streams for the rules
+            return {r.group: _Planned(RulePlanner().plan(r, rng=g),
+                                      (f"{r.group}: planner {self.planner.name} failed ({e}); rule-based plan used",),
+                                      False) for r, g in zip(requests, rngs)}
+
     def plan_many(self, requests: list[PlanRequest], workers: int) -> dict[str, _Planned]:
-        """Plans of ``requests`` made ``workers`` at a time; recorded only when each group is placed."""
-        if workers <= 1 or len(requests) <= 1:
-            return {}
+        """Plans of ``requests`` made ``workers`` at a time (with ``llm.on_top_batch`` > 1, in
+        prompts of that many groups, in ``requests`` order); recorded only when each group is placed."""
+        batch = self.cfg.llm.on_top_batch if hasattr(self.planner, "plan_batch") else 1
+        if batch <= 1 and (workers <= 1 or len(requests) <= 1):
+            return {}  # planned one by one as they are placed
         t0 = time.perf_counter()
-        with ThreadPoolExecutor(max_workers=min(workers, len(requests)), thread_name_prefix="plan") as pool:
-            planned = dict(zip((r.group for r in requests), pool.map(self.plan_ahead, requests)))
+        if batch > 1:
+            chunks = [requests[i:i + batch] for i in range(0, len(requests), batch)]
+            planned: dict[str, _Planned] = {}
+            with ThreadPoolExecutor(max_workers=max(1, min(workers, len(chunks))), thread_name_prefix="plan") as pool:
+                for part in pool.map(self.plan_batch_ahead, chunks):
+                    planned.update(part)
+        else:
+            with ThreadPoolExecutor(max_workers=min(workers, len(requests)), thread_name_prefix="plan") as pool:
+                planned = dict(zip((r.group for r in requests), pool.map(self.plan_ahead, requests)))
         self.timing["plan_on_top"] = round(time.perf_counter() - t0, 4)
         return planned
 
