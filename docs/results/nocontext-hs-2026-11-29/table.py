@@ -31,6 +31,20 @@ def per_room(runs: list[dict]) -> list[float]:
                            for r in runs])) for room in ROOMS]
 
 
+def reading(a: list[dict], nc: list[dict], lead: str = "context complexity carries part of the lead") -> str:
+    """The plan's rule on the learned dev AP50 of paired seeds: ASSIST-3D ahead by more than the larger std."""
+    va, vn = np.array([r["AP50"] for r in a]), np.array([r["AP50"] for r in nc])
+    gap, sd = va.mean() - vn.mean(), max(va.std(ddof=1), vn.std(ddof=1))
+    if gap > sd:
+        verdict = lead
+    elif gap >= -sd:
+        verdict = "no effect of that size"
+    else:
+        verdict = "no-context above ASSIST-3D by more than one std (reported as it is)"
+    return (f"reading: ASSIST-3D - no-context {gap:+.3f} against the larger std {sd:.3f}, ASSIST-3D ahead in "
+            f"{int(np.sum(va > vn))} of 3 paired seeds: {verdict}")
+
+
 def main() -> None:
     a, nc = load(ARM_A, "assist3d-household-sparse"), load(HERE / "per_seed", "no-context-household-sparse")
     print("learned dev AP50 (the probe's figure), household-sparse data, 200 steps")
@@ -43,16 +57,7 @@ def main() -> None:
     if len(nc) < 3:
         print("reading: partial, no verdict")
         return
-    va, vn = np.array([r["AP50"] for r in a]), np.array([r["AP50"] for r in nc])
-    gap, sd = va.mean() - vn.mean(), max(va.std(ddof=1), vn.std(ddof=1))
-    if gap > sd:
-        verdict = "context complexity carries part of the lead"
-    elif gap >= -sd:
-        verdict = "no effect of that size"
-    else:
-        verdict = "no-context above ASSIST-3D by more than one std (reported as it is)"
-    print(f"reading: ASSIST-3D - no-context {gap:+.3f} against the larger std {sd:.3f}, ASSIST-3D ahead in "
-          f"{int(np.sum(va > vn))} of 3 paired seeds: {verdict}")
+    print(reading(a, nc))
     hyb = [r["hybrid"]["AP50"] for r in nc if "hybrid" in r]
     if hyb:
         print(f"no-context hybrid dev AP50 (today's inference, plane refit): {np.mean(hyb):.3f} ± "

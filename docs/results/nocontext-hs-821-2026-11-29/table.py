@@ -19,7 +19,9 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 CAND = HERE.parent / "ship-candidate-2026-11-28"
 sys.path.insert(0, str(CAND))
+sys.path.insert(0, str(HERE.parent / "nocontext-hs-2026-11-29"))
 from rule import figures  # noqa: E402  (the six evaluation files of one model, read as the candidate's rule reads them)
+from table import reading  # noqa: E402  (the 200-step plan's rule, the same at 821 steps)
 
 CAND_DIRS = [CAND, CAND / "seed1", CAND / "seed2"]
 ROOMS = ("scene0006", "scene0007", "scene0008", "scene0009", "scene0010")
@@ -44,16 +46,7 @@ def main() -> None:
               + f"); AP25 {np.mean([r['AP25'] for r in runs]):.3f}; per room (0006-0010) "
               + " ".join(f"{x:.3f}" for x in per_room(runs)))
     if len(nc) == 3:
-        va, vn = np.array([r["AP50"] for r in a]), np.array([r["AP50"] for r in nc])
-        gap, sd = va.mean() - vn.mean(), max(va.std(ddof=1), vn.std(ddof=1))
-        if gap > sd:
-            verdict = "context complexity carries part of the lead at 821 steps"
-        elif gap >= -sd:
-            verdict = "no effect of that size"
-        else:
-            verdict = "no-context above ASSIST-3D by more than one std (reported as it is)"
-        print(f"reading: ASSIST-3D - no-context {gap:+.3f} against the larger std {sd:.3f}, ASSIST-3D ahead in "
-              f"{int(np.sum(va > vn))} of 3 paired seeds: {verdict}")
+        print(reading(a, nc, "context complexity carries part of the lead at 821 steps"))
     else:
         print(f"reading: partial ({len(nc)} of 3 seeds), no verdict")
     print("six evaluations per model (clean + five 1 mm draws, today's inference), AP50")

@@ -73,14 +73,8 @@ class LLMPlanner:
             checked, problems = _check(first, request)
             if problems:
                 repairs = 1
-                log.info("%s %s: %d problem(s) in the answer; asking for a repair: %s", self.name,
-                         request.group, len(problems), inert("; ".join(problems[:5])))
-                repair_messages = messages + [
-                    {"role": "assistant", "content": first.content},
-                    {"role": "user", "content": render_repair_message(problems, self.cfg.prompt_dir)},
-                ]
                 try:
-                    second = self.client.complete(repair_messages, usage=usage)
+                    second = self._repair(request.group, messages, first, problems, usage)
                     checked2, problems2 = _check(second, request)
                 except LLMError as e:
                     if checked is None:
@@ -127,14 +121,8 @@ class LLMPlanner:
             if any(problems for _, problems in results):  # a problem of the whole answer alone costs no repair
                 repairs = 1
                 listed = general + [f"group {r.group}: {p}" for r, (_, ps) in zip(requests, results) for p in ps]
-                log.info("%s batch of %d groups: %d problem(s) in the answer; asking for a repair: %s", self.name,
-                         len(requests), len(listed), inert("; ".join(listed[:5])))
-                repair_messages = messages + [
-                    {"role": "assistant", "content": first.content},
-                    {"role": "user", "content": render_repair_message(listed, self.cfg.prompt_dir)},
-                ]
                 try:
-                    second = self.client.complete(repair_messages, usage=usage)
+                    second = self._repair(f"batch of {len(requests)} groups", messages, first, listed, usage)
                     results2, _ = _check_batch(second, requests)
                 except LLMError as e:
                     if all(checked is None for checked, _ in results):
@@ -165,6 +153,16 @@ class LLMPlanner:
                 continue
             plans.append(self._with_stats(plan, mine, mine_repairs, notes, t0))
         return plans
+
+    def _repair(self, what: str, messages: list[dict[str, str]], first: ChatAnswer, problems: list[str],
+                usage: Usage) -> ChatAnswer:
+        """The one repair round: the first answer and its problems go back; the second answer."""
+        log.info("%s %s: %d problem(s) in the answer; asking for a repair: %s", self.name, what, len(problems),
+                 inert("; ".join(problems[:5])))
+        return self.client.complete(messages + [
+            {"role": "assistant", "content": first.content},
+            {"role": "user", "content": render_repair_message(problems, self.cfg.prompt_dir)},
+        ], usage=usage)
 
     def _finish(self, request: PlanRequest, checked: CheckedAnswer | None, problems: list[str],
                 extra_notes: list[str], rng: np.random.Generator) -> tuple[GroupPlan, tuple[str, ...]]:
