@@ -140,9 +140,8 @@ class LLMPlanner:
                     else:
                         results[i] = (None, p2 or p1)
         except LLMError as e:
-            plans = [self._fell_back(r, e, g, usage if i == 0 else Usage(), repairs if i == 0 else 0, t0)
-                     for i, (r, g) in enumerate(zip(requests, rngs))]
-            return plans
+            return [self._fell_back(r, e, g, usage if i == 0 else Usage(), repairs if i == 0 else 0, t0)
+                    for i, (r, g) in enumerate(zip(requests, rngs))]
         plans = []
         for i, (request, rng, (checked, problems)) in enumerate(zip(requests, rngs, results)):
             mine, mine_repairs = (usage, repairs) if i == 0 else (Usage(), 0)
