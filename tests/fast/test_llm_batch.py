@@ -11,19 +11,19 @@ import numpy as np
 import pytest
 
 from assist3d.config import LLMConfig
-from assist3d.core.contracts import Relation
+from assist3d.core.contracts import PlacedInstance, Relation
 from assist3d.llm.planner import LLMPlanner
 from assist3d.llm.prompts import render_batch_messages
 from assist3d.llm.schema import split_batch_answer
 from assist3d.planning.relations import PlanRequest, validate_plan
 from llm_fakeserver import SENTINEL, FakeServer, Step
 from test_llm_layout import MODEL as LAYOUT_MODEL, _catalog, _llm_cfg
-from test_llm_planner import FLOOR, ONTOP, ROOM, SOFA, TABLE, ReversePlanner, _asset
+from test_llm_planner import FLOOR, ONTOP, ROOM, ReversePlanner, _asset
 
 MODEL = "fake-model"
 layout_mod = pytest.importorskip("assist3d.scene.layout")
 
-SHELF = ONTOP.placed[0].__class__(12, "proc:shelf/0", "shelf", "floor", np.eye(4))
+SHELF = PlacedInstance(12, "proc:shelf/0", "shelf", "floor", np.eye(4))
 ONSHELF = PlanRequest("on:12", (_asset(20, "Vase", "vase", (0.15, 0.15, 0.3), ("obj",)),
                                 _asset(21, "Book", "book", (0.2, 0.15, 0.04), ("obj",)),
                                 _asset(22, "Clock", "clock", (0.2, 0.1, 0.2), ("obj",))), ROOM,

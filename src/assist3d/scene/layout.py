@@ -113,29 +113,22 @@ class _Run:
 
     def plan_ahead(self, request: PlanRequest) -> _Planned:
         """Plan one group without touching the run's records (safe to call from several threads)."""
-        rng = make_rng(self.seed, "plan", request.group)
-        if self.deadline is not None and time.monotonic() >= self.deadline:
-            note = (f"{request.group}: the scene's LLM planning budget ({self.budget_s:g} s) was spent; "
-                    f"rule-based plan used")
-            return _Planned(RulePlanner().plan(request, rng=rng), (note,), True)
-        try:
-            return _Planned(self.planner.plan(request, rng=rng), (), False)
-        except AssistError as e:
-            note = f"{request.group}: planner {self.planner.name} failed ({e}); rule-based plan used"
-            return _Planned(RulePlanner().plan(request, rng=rng), (note,), False)
+        return self.plan_ahead_many([request])[request.group]
 
-    def plan_batch_ahead(self, requests: list[PlanRequest]) -> dict[str, _Planned]:
-        """Plan several on-top groups with one prompt (``llm.on_top_batch``), like :meth:`plan_ahead`."""
+    def plan_ahead_many(self, requests: list[PlanRequest]) -> dict[str, _Planned]:
+        """Plan one group, or several on-top groups with one prompt (``llm.on_top_batch``), by group name,
+        without touching the run's records. Past the scene's budget, or when the planner fails, the
+        rules plan each group, with a note."""
         rngs = [make_rng(self.seed, "plan", r.group) for r in requests]
         if self.deadline is not None and time.monotonic() >= self.deadline:
             return {r.group: _Planned(RulePlanner().plan(r, rng=g),
                                       (f"{r.group}: the scene's LLM planning budget ({self.budget_s:g} s) was "
                                        f"spent; rule-based plan used",), True) for r, g in zip(requests, rngs)}
         try:
-            plans = self.planner.plan_batch(requests, rngs=rngs)  # type: ignore[attr-defined]
+            plans = (self.planner.plan_batch(requests, rngs=rngs) if len(requests) > 1  # type: ignore[attr-defined]
+                     else [self.planner.plan(requests[0], rng=rngs[0])])
             return {p.group: _Planned(p, (), False) for p in plans}
         except AssistError as e:
-            rngs = [make_rng(self.seed, "plan", r.group) for r in requests]  # fresh streams for the rules
             return {r.group: _Planned(RulePlanner().plan(r, rng=g),
                                       (f"{r.group}: planner {self.planner.name} failed ({e}); rule-based plan used",),
                                       False) for r, g in zip(requests, rngs)}
@@ -147,15 +140,11 @@ class _Run:
         if batch <= 1 and (workers <= 1 or len(requests) <= 1):
             return {}  # planned one by one as they are placed
         t0 = time.perf_counter()
-        if batch > 1:
-            chunks = [requests[i:i + batch] for i in range(0, len(requests), batch)]
-            planned: dict[str, _Planned] = {}
-            with ThreadPoolExecutor(max_workers=max(1, min(workers, len(chunks))), thread_name_prefix="plan") as pool:
-                for part in pool.map(self.plan_batch_ahead, chunks):
-                    planned.update(part)
-        else:
-            with ThreadPoolExecutor(max_workers=min(workers, len(requests)), thread_name_prefix="plan") as pool:
-                planned = dict(zip((r.group for r in requests), pool.map(self.plan_ahead, requests)))
+        chunks = [requests[i:i + max(1, batch)] for i in range(0, len(requests), max(1, batch))]
+        planned: dict[str, _Planned] = {}
+        with ThreadPoolExecutor(max_workers=max(1, min(workers, len(chunks))), thread_name_prefix="plan") as pool:
+            for part in pool.map(self.plan_ahead_many, chunks):
+                planned.update(part)
         self.timing["plan_on_top"] = round(time.perf_counter() - t0, 4)
         return planned
 
