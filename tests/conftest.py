@@ -34,6 +34,14 @@ def real_scan_path() -> Path:
 
 
 @pytest.fixture
+def real_dev_dir() -> Path:
+    dev = SHARED / "data" / "real" / "dev"
+    if not dev.is_dir() or not any(dev.glob("*.npy")):
+        pytest.skip(f"real dev scans not found at {dev}")
+    return dev
+
+
+@pytest.fixture
 def sh3d_dir() -> Path:
     if not SH3D_DIR.is_dir() or not any(SH3D_DIR.glob("*.sh3f")):
         pytest.skip("Sweet Home 3D furniture catalogs not installed (apt-get install sweethome3d-furniture)")

@@ -94,6 +94,27 @@ def test_scannet_reader(tmp_path):
     assert s.valid.all() and s.instance.dtype == np.int32
 
 
+def test_scannet_annotated_objects_option(tmp_path):
+    """``?objects=annotated`` counts every annotated instance the label map knows but the room's
+    structure: a lamp (outside the 18 benchmark classes) becomes an object, the wall and the ceiling
+    stay void, and a label the map lacks stays void; classes (``segment``) do not change."""
+    d = write_scannet_scene(tmp_path)
+    (tmp_path / "scannetv2-labels.combined.tsv").write_text(TSV + "5\tlamp\tlamp\t300\t35\t13\tlamp\n")
+    (d / "scene0000_00_vh_clean_2.0.010000.segs.json").write_text(json.dumps(
+        {"segIndices": [5, 5, 17, 17, 9, 33, 7, 42]}))
+    (d / "scene0000_00.aggregation.json").write_text(json.dumps({"segGroups": [
+        {"objectId": 0, "segments": [5], "label": "wall"}, {"objectId": 1, "segments": [17], "label": "chair"},
+        {"objectId": 2, "segments": [9], "label": "lamp"}, {"objectId": 3, "segments": [33], "label": "ceiling"},
+        {"objectId": 4, "segments": [7], "label": "no such label"}]}))
+    bench = open_dataset(f"scannet:{tmp_path}")[0]
+    assert bench.instance.tolist() == [-1, -1, 0, 0, -1, -1, -1, -1]
+    every = open_dataset(f"scannet:{tmp_path}?objects=annotated")[0]
+    assert every.instance.tolist() == [-1, -1, 0, 0, 1, -1, -1, -1]
+    assert np.array_equal(every.segment, bench.segment)
+    with pytest.raises(ConfigError, match=r"objects='all'.*benchmark, annotated"):
+        open_dataset(f"scannet:{tmp_path}?objects=all")
+
+
 def test_scannet_label_map_option_and_errors(tmp_path):
     write_scannet_scene(tmp_path / "ds")
     with pytest.raises(DataError, match="labels="):
@@ -264,6 +285,16 @@ def test_array_reader(tmp_path):
     assert s.scene_id == "scene0451_01"
     assert s.instance.tolist() == [-1, -1, -1, 4, 5]
     assert s.segment.tolist() == [-1, 0, 1, 2, 19]
+    # every annotated instance but walls and floors: a label-0 object (a lamp, say) counts too, an
+    # unannotated point (instance 0) does not
+    a[:, 7] = [1, 2, 3, 4, 0]
+    a[4, 6] = 0
+    np.save(tmp_path / "scene0451_01.npy", a)
+    assert open_dataset(f"array:{tmp_path / 'scene0451_01.npy'}")[0].instance.tolist() == [-1, -1, -1, 4, -1]
+    every = open_dataset(f"array:{tmp_path / 'scene0451_01.npy'}?objects=annotated")[0]
+    assert every.instance.tolist() == [1, -1, -1, 4, -1]
+    with pytest.raises(ConfigError, match="objects="):
+        open_dataset(f"array:{tmp_path}?objects=everything")
     np.save(tmp_path / "bad.npy", np.zeros((5, 7), np.float32))
     with pytest.raises(DataError, match=r"bad\.npy.*\(N, 8\)"):
         open_dataset(f"array:{tmp_path}").load("bad")

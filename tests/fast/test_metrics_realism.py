@@ -97,6 +97,9 @@ def test_no_objects_gives_no_score_and_bad_input_is_refused():
 def test_shipped_reference_loads():
     ref = RealismReference.load()
     assert set(ref.quantiles) == set(STATS) and ref.objects > 50
+    # built from every annotated real object (as generated scans label every object), not only the
+    # 18 benchmark classes (128 objects in the 10 dev scans)
+    assert "objects=annotated" in ref.source and ref.objects > 300
 
 
 def test_matched_sample_removes_the_small_sample_penalty():
@@ -156,3 +159,17 @@ def test_realism_reference_script_scores_datasets_at_each_rooms_size(tmp_path, c
     assert all(0 <= v["mean"] <= 100 and v["std"] >= 0 for v in row["rooms"].values())
     with pytest.raises(SystemExit):
         script.main([f"array:{tmp_path / 'real'}", "--score", f"array:{tmp_path / 'gen'}", "--matched", "5"])
+
+
+def test_shipped_reference_is_the_dev_scans_with_every_annotated_object(real_dev_dir):
+    """The shipped quantiles are what ``scripts/realism_reference.py`` gives on the real dev scans read
+    with ``?objects=annotated`` today (a change in the statistics or the reader would show here); the
+    benchmark reading counts far fewer objects."""
+    from assist3d.bench.metrics.realism import stats_of_dataset
+    dev = real_dev_dir
+    rebuilt = RealismReference.from_stats(stats_of_dataset(f"array:{dev}?objects=annotated"), "rebuilt")
+    shipped = RealismReference.load()
+    assert rebuilt.objects == shipped.objects and rebuilt.scenes == shipped.scenes == 10
+    for k in STATS:
+        assert np.allclose(rebuilt.quantiles[k], shipped.quantiles[k], atol=1e-5), k
+    assert stats_of_dataset(f"array:{dev}").objects < shipped.objects / 2

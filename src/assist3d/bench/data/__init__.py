@@ -6,15 +6,18 @@ Open one with a spec ``FORMAT:PATH`` plus optional reader options as a URL-style
 ==========  =============================================================  ====================
 format      PATH                                                           options
 ==========  =============================================================  ====================
-scannet     folder of ScanNet v2 scene folders (or ``scans/``'s parent)     ``labels=TSV``
+scannet     folder of ScanNet v2 scene folders (or ``scans/``'s parent)     ``labels=TSV``, ``objects``
 scannetpp   ScanNet++ root (holding ``data/``) or ``data/``                 -
 s3dis       ``Stanford3dDataset_v1.2_Aligned_Version``, an area or a room   ``cache=1``
 pointcept   Pointcept scene folder, split folder or root of splits         ``segment``, ``ignore``
 assist3d    our generator's output folder                                  -
-array       one ``(N, 8)`` ``.npy`` or a folder of them                    -
+array       one ``(N, 8)`` ``.npy`` or a folder of them                    ``objects``
 ==========  =============================================================  ====================
 
-In every reader, objects are the points with ``instance >= 0``; ``instance == -1`` is void. Bad
+In every reader, objects are the points with ``instance >= 0``; ``instance == -1`` is void. The
+ScanNet-protocol readers count the 18 benchmark classes as objects; ``?objects=annotated`` counts every
+annotated instance but walls, floors (and ceilings) instead (Pointcept: ``?ignore=0,1`` with
+``segment20``). Bad
 points and labels are refused with a :class:`~assist3d.core.errors.DataError` naming the file; bad
 colours and normals are cleaned with a warning (``docs/evaluation.md``, "Input validation").
 """
@@ -49,12 +52,12 @@ class Reader:
 
 #: dataset formats by name (the ``FORMAT`` of ``FORMAT:PATH``)
 READERS: Registry[Reader] = Registry("dataset format")
-READERS.add("scannet", Reader(lambda p, **kw: ScanNetDataset(p, **kw), frozenset({"labels"})))
+READERS.add("scannet", Reader(lambda p, **kw: ScanNetDataset(p, **kw), frozenset({"labels", "objects"})))
 READERS.add("scannetpp", Reader(lambda p, **kw: ScanNetPPDataset(p, **kw)))
 READERS.add("s3dis", Reader(lambda p, **kw: S3DISDataset(p, **kw), frozenset({"cache"})))
 READERS.add("pointcept", Reader(lambda p, **kw: PointceptDataset(p, fmt="pointcept", **kw), frozenset({"segment", "ignore"})))
 READERS.add("assist3d", Reader(lambda p, **kw: PointceptDataset(p, fmt="assist3d", **kw)))
-READERS.add("array", Reader(lambda p, **kw: ArrayDataset(p, **kw)))
+READERS.add("array", Reader(lambda p, **kw: ArrayDataset(p, **kw), frozenset({"objects"})))
 FORMATS: tuple[str, ...] = READERS.names()  # the built-in formats
 
 

@@ -5,7 +5,10 @@ Columns: x, y, z, r, g, b, semantic (ScanNet-20 class index + 1; 0 = none), inst
 
 Objects follow the ScanNet protocol: points whose semantic label is 3..20 (the 18 classes other
 than wall and floor) keep their instance id; labels 0, 1, 2 are void (instance -1). ``segment`` is
-the ScanNet-20 index (semantic - 1; -1 for label 0).
+the ScanNet-20 index (semantic - 1; -1 for label 0). With ``array:PATH?objects=annotated`` every
+annotated instance (id >= 1) counts except walls and floors (labels 1, 2): also the objects of
+classes outside the 20 (label 0: lamps, boxes, pillows, ...), which arrangement statistics need
+(the layout realism score) and the benchmark leaves out. The default is ``objects=benchmark``.
 
 Validation (``docs/evaluation.md``, "Input validation"): an array that is not ``(N, 8)`` real
 numbers, has no rows, non-finite or far-out coordinates, fractional or non-finite labels, semantic
@@ -22,7 +25,8 @@ import numpy as np
 
 from ...core.contracts import PointSample
 from ...core.errors import DataError
-from .base import MAX_INSTANCE_ID, REAL_KINDS, SceneDataset, checked_coords, clean_colors, integer_labels, read_npy
+from .base import (MAX_INSTANCE_ID, REAL_KINDS, SceneDataset, checked_coords, clean_colors, integer_labels, object_policy,
+                   read_npy)
 
 log = logging.getLogger(__name__)
 
@@ -33,8 +37,9 @@ LAST_OBJECT_LABEL = 20
 class ArrayDataset(SceneDataset):
     """Single-array ``.npy`` scenes (see the module docstring)."""
 
-    def __init__(self, root: Path) -> None:
+    def __init__(self, root: Path, *, objects: str = "benchmark") -> None:
         root = Path(root)
+        self._annotated = object_policy(f"array:{root}", objects) == "annotated"
         if root.is_file():
             files = {root.stem: root}
         elif root.is_dir():
@@ -55,7 +60,10 @@ class ArrayDataset(SceneDataset):
         n = len(a)
         semantic = integer_labels(path, a[:, 6], "semantic labels (column 6)", low=0, high=LAST_OBJECT_LABEL)
         inst = integer_labels(path, a[:, 7], "instance ids (column 7)", low=-1, high=MAX_INSTANCE_ID, void_below=True)
-        is_object = (semantic >= FIRST_OBJECT_LABEL) & (semantic <= LAST_OBJECT_LABEL)
+        if self._annotated:  # every annotated instance but walls and floors
+            is_object = (inst >= 1) & ((semantic == 0) | (semantic >= FIRST_OBJECT_LABEL))
+        else:
+            is_object = (semantic >= FIRST_OBJECT_LABEL) & (semantic <= LAST_OBJECT_LABEL)
         return PointSample(
             scene_id=scene_id,
             coord=coord,

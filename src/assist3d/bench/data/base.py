@@ -17,7 +17,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from ...core.contracts import PointSample
-from ...core.errors import DataError, shown
+from ...core.errors import ConfigError, DataError, shown
 
 log = logging.getLogger(__name__)
 
@@ -30,6 +30,10 @@ MAX_CLASS_INDEX = 65_535
 MAX_INSTANCE_ID = int(np.iinfo(np.int32).max)
 #: numpy type kinds that hold real numbers: signed and unsigned integers, floats.
 REAL_KINDS = "iuf"
+#: Which instances a ScanNet-protocol reader counts as objects (its ``?objects=`` option):
+#: ``benchmark``, the 18 benchmark classes (evaluation); ``annotated``, every annotated instance but
+#: the room's structure (arrangement statistics, where generated scans label every object).
+OBJECT_POLICIES: tuple[str, ...] = ("benchmark", "annotated")
 
 
 class SceneDataset:
@@ -83,6 +87,13 @@ class SceneDataset:
 
     def _load(self, scene_id: str) -> PointSample:  # pragma: no cover - every reader overrides it
         raise DataError(f"{type(self).__name__} cannot load scenes")
+
+
+def object_policy(dataset: str, value: str) -> str:
+    """The ``?objects=`` option of ``dataset`` checked against :data:`OBJECT_POLICIES`."""
+    if value not in OBJECT_POLICIES:
+        raise ConfigError(f"dataset {dataset}: ?objects={value!r} must be one of {', '.join(OBJECT_POLICIES)}")
+    return value
 
 
 def read_json(path: Path) -> Any:

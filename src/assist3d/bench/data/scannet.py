@@ -7,7 +7,10 @@ scene folder), each with ``<scene>_vh_clean_2.ply``, ``<scene>_vh_clean_2.0.0100
 official download), else from each scene folder.
 
 Objects are the instances of the 18 ScanNet benchmark classes (nyu40 ids below); every other point
-(walls, floors, other classes, unannotated vertices) has instance -1. ``segment`` is the ScanNet-20
+(walls, floors, other classes, unannotated vertices) has instance -1. With
+``scannet:PATH?objects=annotated`` every annotated instance whose label the map knows counts, except
+structure (nyu40 wall 1, floor 2, ceiling 22): what arrangement statistics need (the layout realism
+score), where the benchmark keeps its 18 classes. ``segment`` is the ScanNet-20
 class index (0 wall, 1 floor, 2 cabinet, ...), -1 outside the 20 classes. Points are in mesh-vertex
 order; normals are the mesh's area-weighted vertex normals.
 """
@@ -23,7 +26,7 @@ import numpy as np
 
 from ...core.contracts import PointSample
 from ...core.errors import DataError, shown
-from .base import SceneDataset, instances_from_groups, integer_list, read_json, require_key
+from .base import SceneDataset, instances_from_groups, integer_list, object_policy, read_json, require_key
 from .ply import read_scan_mesh
 
 log = logging.getLogger(__name__)
@@ -33,6 +36,8 @@ LABEL_MAP_NAME = "scannetv2-labels.combined.tsv"
 SCANNET20_NYU40: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 14, 16, 24, 28, 33, 34, 36, 39)
 #: nyu40 ids of the 18 instance classes (the 20 without wall 1 and floor 2).
 SCANNET18_NYU40: tuple[int, ...] = SCANNET20_NYU40[2:]
+#: nyu40 ids of the room's structure (wall, floor, ceiling): never objects.
+STRUCTURE_NYU40: tuple[int, ...] = (1, 2, 22)
 
 
 @lru_cache(maxsize=8)
@@ -89,8 +94,9 @@ def _is_scene_dir(d: Path) -> bool:
 class ScanNetDataset(SceneDataset):
     """ScanNet v2 raw scans (see the module docstring for layout and labels)."""
 
-    def __init__(self, root: Path, *, labels: str | None = None) -> None:
+    def __init__(self, root: Path, *, labels: str | None = None, objects: str = "benchmark") -> None:
         root = Path(root)
+        self._annotated = object_policy(f"scannet:{root}", objects) == "annotated"
         if not root.exists():
             raise DataError(f"{root}: ScanNet folder not found")
         if _is_scene_dir(root):
@@ -135,7 +141,8 @@ class ScanNetDataset(SceneDataset):
             if nyu is None:
                 unknown.add(label)
                 nyu = 0
-            groups.append((segments, nyu in SCANNET18_NYU40, nyu_to_20.get(nyu, -1)))
+            is_object = nyu in SCANNET18_NYU40 or (self._annotated and nyu > 0 and nyu not in STRUCTURE_NYU40)
+            groups.append((segments, is_object, nyu_to_20.get(nyu, -1)))
         if unknown:
             log.warning("%s: labels not in the label map (treated as void): %s", agg_path, shown(sorted(unknown), 400))
         instance, segment = instances_from_groups(agg_path, seg, groups)

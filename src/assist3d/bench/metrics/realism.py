@@ -16,6 +16,10 @@ per object (an instance with at least ``MIN_VOXELS`` occupied 5 cm voxels)
 per scene
   ``coverage``        share of the scan's floor-plan cells covered by objects, in [0, 1]
 
+Objects must mean the same on both sides: generated scans label every placed object, so real scans
+are read with every annotated object (``array:...?objects=annotated``, ``scannet:...?objects=annotated``),
+not only the 18 classes of the ScanNet benchmark; the shipped reference is built that way.
+
 Every cloud is first reduced to one point per 5 cm voxel, so a 50,000-vertex ScanNet subsample and
 a dense rendered cloud give the same statistics for the same room. The room's boundary is the
 outline of the scan's floor plan (10 cm cells occupied by any point, holes filled): it needs no
