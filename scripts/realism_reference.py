@@ -9,8 +9,10 @@
 ``?objects=annotated`` makes the reader count every annotated object of the real scans (lamps, boxes,
 pillows as well as the 18 benchmark classes; walls and floors never), as generated scans label every
 placed object: without it the real side counts fewer kinds of objects than the generated side
-(128 benchmark objects against 328 annotated ones of at least 20 voxels in the 10 dev scans), and the density statistics
-are then not measured the same way. The shipped reference is built with it.
+(128 benchmark objects against 328 annotated ones of at least 20 voxels in the 10 dev scans), and the
+density statistics are then not measured the same way. The shipped reference is built with it, and
+every spec given here is read with it unless it says ``?objects=benchmark`` (how the figures made
+before 2026-11-29 were measured).
 
 ``--out`` writes the quantiles of every statistic of ``assist3d.bench.metrics.realism`` over the given
 scans (derived statistics only: no point of a scan is stored). ``--loro`` scores each room against a
@@ -35,8 +37,8 @@ import numpy as np
 
 from assist3d.bench.data import open_dataset
 from assist3d.core.fileio import write_json_atomic
-from assist3d.bench.metrics.realism import (RealismReference, RealismStats, matched_sample, realism_score, scene_stats,
-                                            stats_of_dataset)
+from assist3d.bench.metrics.realism import (RealismReference, RealismStats, matched_sample, realism_score, realism_spec,
+                                            scene_stats, stats_of_dataset)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -52,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.matched and not (args.loro and args.score):
         ap.error("--matched needs --loro and --score")
-    ds = open_dataset(args.spec)
+    ds = open_dataset(realism_spec(args.spec))
     per_scene = {sid: scene_stats(s.coord, s.instance) for sid, s in ((i, ds.load(i)) for i in ds.scene_ids)}
     report: dict = {"spec": args.spec, "scenes": len(per_scene)}
     total = RealismStats()

@@ -172,4 +172,28 @@ def test_shipped_reference_is_the_dev_scans_with_every_annotated_object(real_dev
     assert rebuilt.objects == shipped.objects and rebuilt.scenes == shipped.scenes == 10
     for k in STATS:
         assert np.allclose(rebuilt.quantiles[k], shipped.quantiles[k], atol=1e-5), k
-    assert stats_of_dataset(f"array:{dev}").objects < shipped.objects / 2
+    assert stats_of_dataset(f"array:{dev}?objects=benchmark").objects < shipped.objects / 2
+
+
+def test_realism_reads_real_scans_with_every_annotated_object(tmp_path):
+    """The score reads a ScanNet-protocol dataset with ``objects=annotated`` unless told otherwise, in the
+    reference, in the script's specs and in ``assist3d metrics``: a lamp (label 0, outside the benchmark's
+    classes) counts as an object for realism while the other metrics keep the benchmark's objects."""
+    from assist3d.bench.metrics.realism import realism_spec, stats_of_dataset
+    from assist3d.bench.metrics.report import summarize_dataset
+    assert realism_spec("array:/d") == "array:/d?objects=annotated"
+    assert realism_spec("scannet:/d?labels=/m.tsv") == "scannet:/d?labels=/m.tsv&objects=annotated"
+    assert realism_spec("array:/d?objects=benchmark") == "array:/d?objects=benchmark"
+    assert realism_spec("assist3d:/d") == "assist3d:/d"
+    g = np.mgrid[0:0.5:0.05, 0:0.5:0.05].reshape(2, -1).T  # a 50 cm square of 5 cm cells: 100 voxels
+    floor = np.c_[np.mgrid[0:4:0.05, 0:3:0.05].reshape(2, -1).T, np.zeros(4800)]
+    table = np.c_[g + [1.0, 1.0], np.full(len(g), 0.7)]
+    lamp = np.c_[g + [3.0, 2.0], np.full(len(g), 0.3)]
+    rows = [np.c_[floor, np.zeros((len(floor), 3)), np.full(len(floor), 2), np.zeros(len(floor))],
+            np.c_[table, np.zeros((len(g), 3)), np.full(len(g), 7), np.full(len(g), 5)],
+            np.c_[lamp, np.zeros((len(g), 3)), np.zeros(len(g)), np.full(len(g), 9)]]
+    np.save(tmp_path / "scene0001_00.npy", np.concatenate(rows).astype(np.float32))
+    assert stats_of_dataset(f"array:{tmp_path}").objects == 2
+    assert stats_of_dataset(f"array:{tmp_path}?objects=benchmark").objects == 1
+    summary = summarize_dataset(f"array:{tmp_path}")
+    assert summary.realism.objects == 2 and summary.instances == 1

@@ -1,4 +1,6 @@
 #!/usr/bin/env bash
+# (2026-11-29 later: '?objects=benchmark' pins the reading these figures were made with; the realism code now reads
+# real scans with every annotated object unless told so: docs/results/realism-objects-2026-11-29)
 # issue 14's acceptance on a clean clone beside the project (../shared resolves as in CI)
 set -u
 A=/work/scratch/s25/acc
@@ -15,11 +17,11 @@ python scripts/layout_stats.py --assets /work/scratch/s25/sh3d-lib --scenes 50 >
 python -c "import json;r=json.load(open('$A/layout_stats.json'));print({k:r[k] for k in ('assets','scenes','mean_placed','check_problems_total','scenes_with_problems')})"
 date -u; echo "== acceptance 2: layout realism, 50-scene sets"
 P=/work/scratch/s25/realism
-python scripts/realism_reference.py array:../shared/data/real/dev --score assist3d:$P/assist3d assist3d:$P/randomrooms assist3d:$P/holodeck-style \
+python scripts/realism_reference.py 'array:../shared/data/real/dev?objects=benchmark' --score assist3d:$P/assist3d assist3d:$P/randomrooms assist3d:$P/holodeck-style \
   assist3d:/work/scratch/s20/data/assist3d-household-sparse assist3d:/work/scratch/s20/data/holodeck-allmodels \
   assist3d:/work/scratch/s21/data/randomrooms-household-sparse --max-scenes 50 2> $A/realism.err
 date -u; echo "== real rooms at equal size (--loro --matched 200)"
-python scripts/realism_reference.py array:../shared/data/real/dev --loro --score assist3d:$P/assist3d assist3d:$P/randomrooms assist3d:$P/holodeck-style \
+python scripts/realism_reference.py 'array:../shared/data/real/dev?objects=benchmark' --loro --score assist3d:$P/assist3d assist3d:$P/randomrooms assist3d:$P/holodeck-style \
   assist3d:/work/scratch/s20/data/assist3d-household-sparse assist3d:/work/scratch/s20/data/holodeck-allmodels \
   assist3d:/work/scratch/s21/data/randomrooms-household-sparse --max-scenes 50 --matched 200 --json > $A/matched.json 2> $A/matched.err
 echo "matched rc $?"

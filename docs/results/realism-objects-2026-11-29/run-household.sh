@@ -11,7 +11,7 @@ assist3d generate --out $D/randomrooms-hs --num-scenes 50 --seed 0 --preset rand
 assist3d generate --out $D/holodeck-allmodels --num-scenes 50 --seed 0 --preset holodeck-style --config $HW/allmodels.yaml --assets $LIB --workers 2 --json > $D/gen-h.json 2> $D/gen-h.log || exit 1
 date -u
 SETS="assist3d:$D/assist3d-hs assist3d:$D/randomrooms-hs assist3d:$D/holodeck-allmodels"
-python scripts/realism_reference.py 'array:../shared/data/real/dev' --score $SETS --max-scenes 50 > $D/realism-benchmark-objects.txt
+python scripts/realism_reference.py 'array:../shared/data/real/dev?objects=benchmark' --score $SETS --max-scenes 50 > $D/realism-benchmark-objects.txt
 python scripts/realism_reference.py 'array:../shared/data/real/dev?objects=annotated' --loro --score $SETS --max-scenes 50 --matched 200 --json > $D/realism-annotated-matched.json
 python - $D/realism-annotated-matched.json > $D/realism-annotated.txt <<'PY'
 import json, sys

@@ -41,9 +41,9 @@ def metrics(
     llm_model: Optional[str] = typer.Option(None, "--llm-model", help="Vision model name for --llm-base-url."),
     realism_reference: Optional[str] = typer.Option(
         None, "--realism-reference", help="Reference of layout_realism: a JSON file from scripts/realism_reference.py "
-                                          "or a labelled dataset FORMAT:PATH; read real ScanNet scans with "
-                                          "?objects=annotated (every annotated object, as generated scans label "
-                                          "them). Default: the shipped statistics of real ScanNet scans, built so."),
+                                          "or a labelled dataset FORMAT:PATH, whose real scans count every annotated "
+                                          "object as generated scans do (?objects=benchmark: the 18 benchmark classes "
+                                          "only). Default: the shipped statistics of real ScanNet scans."),
 ) -> None:
     """Geometry diversity, context complexity and layout reasonability of one or more datasets."""
     from ..bench.metrics.diversity import Codebook

@@ -18,7 +18,8 @@ per scene
 
 Objects must mean the same on both sides: generated scans label every placed object, so real scans
 are read with every annotated object (``array:...?objects=annotated``, ``scannet:...?objects=annotated``),
-not only the 18 classes of the ScanNet benchmark; the shipped reference is built that way.
+not only the 18 classes of the ScanNet benchmark; the shipped reference is built that way, and every
+dataset this module opens is read so (:func:`realism_spec`) unless its spec says ``objects=benchmark``.
 
 Every cloud is first reduced to one point per 5 cm voxel, so a 50,000-vertex ScanNet subsample and
 a dense rendered cloud give the same statistics for the same room. The room's boundary is the
@@ -50,7 +51,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from ..data import open_dataset
+from ..data import READERS, open_dataset, parse_spec
 from ...core.errors import DataError
 
 VOXEL = 0.05
@@ -324,9 +325,20 @@ def dataset_stats(samples: Iterable[tuple[np.ndarray, np.ndarray]]) -> RealismSt
     return total
 
 
+def realism_spec(spec: str) -> str:
+    """``spec`` as this score reads it: with ``objects=annotated`` added when its format takes the
+    ``objects`` option (the ScanNet-protocol readers) and the spec does not set it, so that a real
+    scan counts every annotated object, as a generated one does."""
+    fmt, _, options = parse_spec(spec)
+    if "objects" in READERS.get(fmt).options and "objects" not in options:
+        return f"{spec}{'&' if '?' in spec else '?'}objects=annotated"
+    return spec
+
+
 def stats_of_dataset(spec: str, max_scenes: int | None = None) -> RealismStats:
-    """Pooled statistics of the first ``max_scenes`` scenes of a labelled dataset ``FORMAT:PATH``."""
-    ds = open_dataset(spec)
+    """Pooled statistics of the first ``max_scenes`` scenes of a labelled dataset ``FORMAT:PATH``
+    (read through :func:`realism_spec`)."""
+    ds = open_dataset(realism_spec(spec))
     ids = list(ds.scene_ids)[: max_scenes or None]
     return dataset_stats((s.coord, s.instance) for s in (ds.load(i) for i in ids))
 

@@ -24,7 +24,7 @@ from .context import context_complexity, per_class_max_cooccurrence
 from .diversity import Codebook, fit_codebook, geometry_diversity
 from .features import FEATURE_DIM, instance_descriptors
 from .plausibility import score_layout
-from .realism import RealismReference, RealismStats, realism_score, scene_stats
+from .realism import RealismReference, RealismStats, realism_score, realism_spec, scene_stats
 
 log = logging.getLogger(__name__)
 
@@ -84,6 +84,9 @@ def summarize_dataset(spec: str, *, assets: str | None = None, max_scenes: int |
     """Read a dataset once: instance descriptors, per-scene class sets, layout scores."""
     given, spec = spec, normalise_spec(spec)
     ds = open_dataset(spec)
+    # layout realism counts every annotated object of a real scan (as of a generated one): a second
+    # reading where the reader keeps only the benchmark's classes by default
+    realism_ds = open_dataset(realism_spec(spec)) if realism_spec(spec) != spec else None
     summary = DatasetSummary(name=given, spec=spec)
     fmt = spec.split(":", 1)[0]
     catalog = None
@@ -100,7 +103,8 @@ def summarize_dataset(spec: str, *, assets: str | None = None, max_scenes: int |
         sample = ds.load(sid)
         inst_ids, f = instance_descriptors(sample.coord, sample.instance, rng=rng)
         feats.append(f)
-        summary.realism.add(scene_stats(sample.coord, sample.instance))
+        counted = sample if realism_ds is None else realism_ds.load(sid)
+        summary.realism.add(scene_stats(counted.coord, counted.instance))
         layout = _load_layout(Path(ds.root) / sid) if fmt == "assist3d" else None
         if layout is not None:
             summary.scene_classes.append({i.class_name for i in layout.instances})
