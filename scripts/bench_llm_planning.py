@@ -7,11 +7,13 @@ seconds on every K-th request it receives: the hostile endpoint of issue 14), th
 the same layout (preset assist3d, paper selection counts) with the groups planned one after
 another ("serial"), with the on-top groups planned concurrently ("concurrent") and, with
 ``--modes ...,batched``, concurrently in prompts of ``--on-top-batch`` groups ("batched"), each with
-a fresh answer cache, and checks that the layouts are identical.
+a fresh answer cache, and checks that the layouts are identical; ``--answer-formats full,compact``
+runs every mode with each ``llm.answer_format`` (the endpoint answers the same relations in the form
+the prompt asks for).
 
     python scripts/bench_llm_planning.py --assets LIBRARY [--seed 3] [--latency 2] [--concurrency 8]
         [--token-s 0.02] [--stall-every 6 --stall-s 45 --scene-budget 120] [--modes serial,concurrent,batched
-        --on-top-batch 8] [--json]
+        --on-top-batch 8] [--answer-formats full,compact] [--json]
 
 No network access: the server is local and the key is a dummy. Figures go in docs/llm.md.
 """
@@ -36,12 +38,22 @@ SUPPORT = re.compile(r"Support \(the objects rest on it\): id (\d+)")
 BATCH_GROUP = re.compile(r'Group "(on:\d+)", support id (\d+):[^\n]*\nObjects of on:\d+ \((\d+)\)')
 
 
+def _entry(i: int, rels: list[dict], compact: bool):
+    """One object of an answer, in the full or the compact form (the same content)."""
+    if not compact:
+        return {"index": i, "relations": rels}
+    return [i, *(r["relation"] if len(r) == 1 else [r["relation"], *(r["value"] if "value" in r else [r["target"]])]
+                 for r in rels)]
+
+
 def plan_answer(prompt: str) -> str:
     """A well-formed plan for the group (or, for a batch prompt, each group) the prompt asks
-    about: every object listed once, the same plan for a group whether asked alone or in a batch."""
+    about: every object listed once, the same plan for a group whether asked alone or in a batch,
+    in the answer form the prompt asks for (the compact prompts say "as one list")."""
+    compact = "as one list" in prompt
     if "Groups to dress" in prompt:
         return json.dumps({"groups": [
-            {"group": g, "objects": [{"index": i, "relations": [{"relation": "on", "target": int(sid)}]}
+            {"group": g, "objects": [_entry(i, [{"relation": "on", "target": int(sid)}], compact)
                                      for i in range(int(n))]} for g, sid, n in BATCH_GROUP.findall(prompt)]})
     n = int(COUNT.search(prompt).group(1))
     sup = SUPPORT.search(prompt)
@@ -51,7 +63,7 @@ def plan_answer(prompt: str) -> str:
         rels = [[{"relation": "height", "value": [1.0, 1.8]}] for _ in range(n)]
     else:
         rels = [[{"relation": "edge"}] + ([{"relation": "near", "target": i - 1}] if i else []) for i in range(n)]
-    return json.dumps({"objects": [{"index": i, "relations": r} for i, r in enumerate(rels)]})
+    return json.dumps({"objects": [_entry(i, r, compact) for i, r in enumerate(rels)]})
 
 
 class LatencyServer:
@@ -108,10 +120,11 @@ class LatencyServer:
         self.httpd.server_close()
 
 
-def run_once(args, mode: str, cache_dir: str) -> dict:
+def run_once(args, mode: str, cache_dir: str, answer_format: str = "full") -> dict:
     server = LatencyServer(args.latency, args.stall_every, args.stall_s, args.token_s)
     try:
         llm = {"base_url": server.url, "model": "bench-fake", "cache_dir": cache_dir, "retries": 0,
+               "answer_format": answer_format,
                "timeout_s": args.timeout, "concurrency": args.concurrency, "plan_concurrently": mode != "serial",
                "on_top_batch": args.on_top_batch if mode == "batched" else 1, "max_failures": 1000}
         if args.scene_budget:
@@ -125,7 +138,7 @@ def run_once(args, mode: str, cache_dir: str) -> dict:
     finally:
         server.close()
     groups = layout.planner
-    return {"mode": mode, "seconds": round(seconds, 2),
+    return {"mode": mode if answer_format == "full" else f"{mode}/{answer_format}", "seconds": round(seconds, 2),
             "groups": len(groups), "llm_groups": sum(v.startswith("llm:") for v in groups.values()),
             "requests": server.requests, "stalls": server.stalls, "max_active": server.max_active,
             "instances": len(layout.instances), "llm_budget_groups": layout.stats.get("llm_budget_groups"),
@@ -147,6 +160,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scene-budget", type=float, default=None, help="llm.scene_budget_s")
     ap.add_argument("--modes", default="serial,concurrent", help="comma-separated: serial, concurrent, batched")
     ap.add_argument("--on-top-batch", type=int, default=8, help="llm.on_top_batch of the batched mode")
+    ap.add_argument("--answer-formats", default="full",
+                    help="comma-separated llm.answer_format values (full, compact): every mode runs in each")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     rows = []
@@ -154,12 +169,16 @@ def main(argv: list[str] | None = None) -> int:
     unknown = sorted(set(modes) - {"serial", "concurrent", "batched"})
     if unknown:
         ap.error(f"unknown mode(s) {', '.join(unknown)}: use serial, concurrent, batched")
-    for mode in modes:
-        with tempfile.TemporaryDirectory(prefix="bench-llm-") as cache:
-            rows.append(run_once(args, mode, cache))
-        print(f"{mode}: {rows[-1]['seconds']} s", file=sys.stderr)
+    forms = args.answer_formats.split(",")
+    if sorted(set(forms) - {"full", "compact"}):
+        ap.error("--answer-formats takes full and/or compact")
+    for form in forms:
+        for mode in modes:
+            with tempfile.TemporaryDirectory(prefix="bench-llm-") as cache:
+                rows.append(run_once(args, mode, cache, form))
+            print(f"{rows[-1]['mode']}: {rows[-1]['seconds']} s", file=sys.stderr)
     same = len({json.dumps(r.pop("_layout"), sort_keys=True) for r in rows}) == 1
-    report = {"latency_s": args.latency, "token_s": args.token_s, "stall_every": args.stall_every, "stall_s": args.stall_s,
+    report = {"latency_s": args.latency, "token_s": args.token_s, "answer_formats": forms, "stall_every": args.stall_every, "stall_s": args.stall_s,
               "concurrency": args.concurrency, "scene_budget_s": args.scene_budget, "seed": args.seed,
               "on_top_batch": args.on_top_batch if "batched" in modes else None, "runs": rows, "same_layout": same}
     if len(rows) == 2 and rows[1]["seconds"] > 0:

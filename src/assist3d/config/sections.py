@@ -247,6 +247,11 @@ class LLMConfig(Section):
                                                           "group; N > 1 = a scene's on-top groups N at a time (each "
                                                           "group's answer checked, repaired and, failing that, planned "
                                                           "by the rules on its own); at most 64.")
+    answer_format: Literal["full", "compact"] = Field(
+        "full", description="Form of the relation answers the prompts ask for: 'full' (an object per relation, "
+                            "{\"relation\": ..., \"target\": ...}) or 'compact' ([index, \"edge\", [\"near\", 2]], "
+                            "about a third of the tokens: faster and cheaper where answer time grows with "
+                            "length). Either form is read in any answer; the prompts (and so the cache keys) differ.")
     scene_budget_s: float | None = Field(None, gt=0, le=86400, description="LLM planning time per scene, s: groups "
                                          "whose planning starts later are planned by the rules (recorded in "
                                          "layout.json); None = no limit; at most 86400.")

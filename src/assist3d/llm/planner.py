@@ -68,7 +68,7 @@ class LLMPlanner:
         if not request.objects:
             return self._with_stats(self.fallback.plan(request, rng=rng), usage, repairs, (), t0)
         try:
-            messages = render_plan_messages(request, self.cfg.prompt_dir)
+            messages = render_plan_messages(request, self.cfg.prompt_dir, self.cfg.answer_format)
             first = self.client.complete(messages, usage=usage)
             checked, problems = _check(first, request)
             if problems:
@@ -115,7 +115,7 @@ class LLMPlanner:
         repairs = 0
         extra_notes: list[list[str]] = [[] for _ in requests]
         try:
-            messages = render_batch_messages(requests, self.cfg.prompt_dir)
+            messages = render_batch_messages(requests, self.cfg.prompt_dir, self.cfg.answer_format)
             first = self.client.complete(messages, usage=usage)
             results, general = _check_batch(first, requests)
             if any(problems for _, problems in results):  # a problem of the whole answer alone costs no repair

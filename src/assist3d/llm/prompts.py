@@ -30,7 +30,11 @@ from ..core.errors import ConfigError
 from ..planning.relations import CROSS_GROUP, RELATIONS, PlanRequest, group_kind
 
 TEMPLATE_FILES = {"floor": "floor.txt", "wall": "wall.txt", "on": "on_top.txt", "on_batch": "on_top_batch.txt",
+                  "floor_compact": "floor_compact.txt", "wall_compact": "wall_compact.txt",
+                  "on_compact": "on_top_compact.txt", "on_batch_compact": "on_top_batch_compact.txt",
                   "vlm": "vlm_score.txt", "repair": "repair.txt", "room": "room_objects.txt"}
+#: the template of each planning prompt in the compact answer form (``llm.answer_format: compact``)
+COMPACT = {"floor": "floor_compact", "wall": "wall_compact", "on": "on_compact", "on_batch": "on_batch_compact"}
 _NAME_MAX = 60
 
 
@@ -151,10 +155,12 @@ def request_values(request: PlanRequest) -> dict[str, str]:
             "support": support}
 
 
-def render_plan_messages(request: PlanRequest, prompt_dir: str | Path | None = None) -> list[dict[str, str]]:
-    """System and user messages asking for the relations of ``request``'s group."""
+def render_plan_messages(request: PlanRequest, prompt_dir: str | Path | None = None,
+                         answer_format: str = "full") -> list[dict[str, str]]:
+    """System and user messages asking for the relations of ``request``'s group, in the answer
+    form ``answer_format`` ("full" or "compact", ``llm.answer_format``)."""
     kind = group_kind(request.group)
-    system, user = load_template(kind, prompt_dir).render(request_values(request))
+    system, user = load_template(_form(kind, answer_format), prompt_dir).render(request_values(request))
     messages = [{"role": "system", "content": system}] if system else []
     return messages + [{"role": "user", "content": user}]
 
@@ -166,15 +172,21 @@ def describe_group_block(request: PlanRequest) -> str:
             f"Objects of {request.group} ({len(request.objects)}), numbered:\n{describe_objects(request)}")
 
 
+def _form(name: str, answer_format: str) -> str:
+    if answer_format not in ("full", "compact"):
+        raise ConfigError(f"llm.answer_format must be 'full' or 'compact', not {answer_format!r}")
+    return COMPACT[name] if answer_format == "compact" else name
+
+
 def render_batch_messages(requests: list[PlanRequest] | tuple[PlanRequest, ...],
-                          prompt_dir: str | Path | None = None) -> list[dict[str, str]]:
+                          prompt_dir: str | Path | None = None, answer_format: str = "full") -> list[dict[str, str]]:
     """System and user messages asking for the relations of several on-top groups of one scene
     (``llm.on_top_batch``); every request must be an on-top group of the same room."""
     if not requests or any(group_kind(r.group) != "on" for r in requests):
         raise ValueError("a batch prompt holds one or more on-top groups and nothing else")
     values = {"room": describe_room(requests[0].room), "relations": describe_relations("on"),
               "count": str(len(requests)), "groups": "\n\n".join(describe_group_block(r) for r in requests)}
-    system, user = load_template("on_batch", prompt_dir).render(values)
+    system, user = load_template(_form("on_batch", answer_format), prompt_dir).render(values)
     messages = [{"role": "system", "content": system}] if system else []
     return messages + [{"role": "user", "content": user}]
 

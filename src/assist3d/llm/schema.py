@@ -11,6 +11,16 @@ Answer format (one object per line of the group's object list, in placement orde
 *earlier in the answer*, except for ``above`` / ``on`` whose target is the id of an already-placed
 instance; ``height`` takes ``"value": [min_m, max_m]``; ``"hard": true|false`` is optional.
 
+With ``llm.answer_format: compact`` the prompts ask for the same content in about a third of the
+tokens (an LLM's answer time grows with its length, and the floor group's answer bounds a scene)::
+
+    {"objects": [[2, "edge"], [0, ["near", 2], ["face_to", 2, "hard"]], [1, ["height", 1.2, 1.6]]]}
+
+one list per object, ``[index, relation, ...]``; a relation is its name alone (``"edge"``) or a list
+``[name, target]``, ``[name, min_m, max_m]`` (``height``), with ``"hard"`` or ``"soft"`` (or true /
+false) last when given. Every answer may use either form, entry by entry (:func:`expand_compact_entry` turns a
+compact entry into the full one before it is checked).
+
 Several on-top groups asked for in one prompt (``llm.on_top_batch``) are answered as
 ``{"groups": [{"group": "on:7", "objects": [...]}, ...]}`` and each group's entry is checked as
 above (:func:`split_batch_answer`).
@@ -104,7 +114,7 @@ def _salvage_list(text: str, key: re.Pattern[str]) -> list[Any]:
     while True:
         while pos < len(text) and text[pos] in " \t\r\n,":
             pos += 1
-        if pos >= len(text) or text[pos] != "{":
+        if pos >= len(text) or text[pos] not in "{[":  # a full entry or a compact one
             return items
         try:
             item, pos = dec.raw_decode(text, pos)
@@ -175,6 +185,42 @@ def _is_int(v: Any) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
 
+COMPACT_ENTRY = '[<index>, <relation>, ...] with a relation written "name", ["name", target] or ["height", min, max]'
+
+
+def expand_compact_entry(item: list, k: int) -> tuple[dict | None, list[str]]:
+    """A compact answer entry ``[index, relation, ...]`` as ``{"index", "relations"}`` and the
+    problems of the relations it could not read (left out, as :func:`check_answer` leaves out bad
+    relations of a full entry); ``(None, [problem])`` without a readable index. Relation names and
+    targets are judged by :func:`check_answer`, for both forms alike."""
+    if not item or not _is_int(item[0]):
+        return None, [f"entry {k}: expected {COMPACT_ENTRY}"]
+    idx, rels, problems = item[0], [], []
+    for r in item[1:]:
+        if isinstance(r, str):
+            rels.append({"relation": r})
+            continue
+        if not isinstance(r, list) or not r or not isinstance(r[0], str):
+            problems.append(f"object {idx}: a relation must be \"name\", [\"name\", target] or "
+                            f"[\"height\", min, max], got {json.dumps(r)[:80]}")
+            continue
+        name, args = r[0], list(r[1:])
+        rel: dict[str, Any] = {"relation": name}
+        if args and (isinstance(args[-1], bool) or args[-1] in ("hard", "soft")):  # "hard", or true
+            flag = args.pop()
+            rel["hard"] = flag if isinstance(flag, bool) else flag == "hard"
+        spec = RELATIONS.get(name)
+        if spec is not None and spec.values:
+            rel["value"] = args
+        elif len(args) == 1:
+            rel["target"] = args[0]
+        elif args:
+            problems.append(f"object {idx}: relation {name!r} takes one target, got {json.dumps(args)[:60]}")
+            continue
+        rels.append(rel)
+    return {"index": idx, "relations": rels}, problems
+
+
 def check_answer(data: Any, request: PlanRequest) -> CheckedAnswer:
     """Validate a decoded answer against the request; see the module docstring for the format."""
     n = len(request.objects)
@@ -190,8 +236,13 @@ def check_answer(data: Any, request: PlanRequest) -> CheckedAnswer:
     pos_of: dict[int, int] = {}  # object index -> position in the checked order
     order: list[PlannedObject] = []
     for k, item in enumerate(items):
+        if isinstance(item, list):
+            item, unread = expand_compact_entry(item, k)
+            problems.extend(unread)
+            if item is None:
+                continue
         if not isinstance(item, dict) or not _is_int(item.get("index")):
-            problems.append(f"entry {k}: expected {{\"index\": <integer>, \"relations\": [...]}}")
+            problems.append(f"entry {k}: expected {{\"index\": <integer>, \"relations\": [...]}} or {COMPACT_ENTRY}")
             continue
         idx = item["index"]
         if not 0 <= idx < n:
