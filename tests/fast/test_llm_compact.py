@@ -99,3 +99,20 @@ def test_the_planner_asks_in_the_configured_form_and_plans_the_same(monkeypatch,
     assert plans["compact"].order == plans["full"].order and plans["compact"].planner == "llm:fake"
     assert plans["compact"].notes == () and validate_plan(plans["compact"], FLOOR) == []
     assert "as one list" in prompts["compact"] and "as one list" not in prompts["full"]
+
+
+def test_a_compact_answer_with_problems_is_repaired_in_the_compact_form(monkeypatch, tmp_path):
+    """The repair round quotes the compact answer's problems (an invented relation, an object never
+    listed) and the compact repair answer is used; the repair prompt asks for the corrected answer
+    without forcing the full form."""
+    monkeypatch.setenv("OPENAI_API_KEY", SENTINEL)
+    bad = {"objects": [[0, "middle"], [1, ["next_to", 0], ["face_to", 0]]]}  # object 2 missing
+    with FakeServer([Step(json.dumps(bad)), Step(json.dumps(COMPACT["floor"]))]) as srv:
+        cfg = LLMConfig(base_url=srv.url, model="fake", timeout_s=1.0, retries=0, backoff_s=0.01,
+                        cache_dir=str(tmp_path / "llm"), answer_format="compact")
+        plan = LLMPlanner(cfg, fallback=ReversePlanner()).plan(FLOOR, rng=np.random.default_rng(0))
+    assert len(srv.requests) == 2 and plan.stats["repairs"] == 1 and plan.planner == "llm:fake"
+    repair = srv.requests[1]["json"]["messages"][-1]["content"]
+    assert "unknown relation 'next_to'" in repair and "objects never listed: [2]" in repair
+    assert '"relation"' not in repair  # nothing in it asks for the full form
+    assert plan.order == check_answer(COMPACT["floor"], FLOOR).order and plan.notes == ()
