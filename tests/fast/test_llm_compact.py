@@ -74,7 +74,12 @@ def test_compact_prompts_ask_for_the_compact_form():
         full = render_plan_messages(request)[-1]["content"]
         compact = render_plan_messages(request, answer_format="compact")[-1]["content"]
         assert "as one list" in compact and "as one list" not in full
-        assert request_lines(full) == request_lines(compact)  # the same room, objects and vocabulary
+        assert request_lines(full) == request_lines(compact)  # the same room and objects
+        # the same vocabulary, each relation written as the compact answer writes it
+        names = [ln.split()[1] for ln in full.splitlines() if ln.startswith("- ")]
+        listed = [ln for ln in compact.splitlines() if ln.startswith("- ")]
+        assert len(listed) == len(names) and '"target"' not in compact and '"value"' not in compact
+        assert all(ln.startswith((f'- ["{n}", ', f'- "{n}":')) for ln, n in zip(listed, names))
     batch = render_batch_messages([ONTOP, ONSHELF], answer_format="compact")[-1]["content"]
     assert "as one list" in batch and 'Group "on:12"' in batch
     with pytest.raises(ValidationError):
@@ -82,8 +87,8 @@ def test_compact_prompts_ask_for_the_compact_form():
 
 
 def request_lines(prompt: str) -> list[str]:
-    """The lines of a prompt that describe the request (numbered objects, placed ids, relation names)."""
-    return [ln for ln in prompt.splitlines() if ln.lstrip().startswith(("0:", "1:", "2:", "id ", "- "))]
+    """The lines of a prompt that describe the request (room, numbered objects, placed ids)."""
+    return [ln for ln in prompt.splitlines() if ln.lstrip().startswith(("Room:", "0:", "1:", "2:", "id "))]
 
 
 def test_the_planner_asks_in_the_configured_form_and_plans_the_same(monkeypatch, tmp_path):

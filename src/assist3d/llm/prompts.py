@@ -102,20 +102,26 @@ def _clean(name: str) -> str:
     return name if len(name) <= _NAME_MAX else name[: _NAME_MAX - 3] + "..."
 
 
-def describe_relations(kind: str) -> str:
+def describe_relations(kind: str, answer_format: str = "full") -> str:
+    """The relations a group of ``kind`` may use, one line each, written as the answer form writes them."""
+    compact = answer_format == "compact"
     lines = []
     for spec in RELATIONS.values():
         if kind not in spec.groups:
             continue
         if spec.kind in CROSS_GROUP:
-            arg = '"target": <placed instance id>'
+            arg = "<placed instance id>" if compact else '"target": <placed instance id>'
         elif spec.needs_target:
-            arg = '"target": <index of an earlier object>'
+            arg = "<index of an earlier object>" if compact else '"target": <index of an earlier object>'
         elif spec.values:
-            arg = '"value": [min_m, max_m]'
+            arg = "min_m, max_m" if compact else '"value": [min_m, max_m]'
         else:
-            arg = "no target"
-        lines.append(f"- {spec.kind} ({arg}): {spec.description}")
+            arg = ""
+        if compact:
+            name = f'"{spec.kind}"'
+            lines.append(f"- {f'[{name}, {arg}]' if arg else name}: {spec.description}")
+        else:
+            lines.append(f"- {spec.kind} ({arg or 'no target'}): {spec.description}")
     return "\n".join(lines)
 
 
@@ -145,12 +151,13 @@ def _describe_instance(p: PlacedInstance) -> str:
     return f"id {p.id}: {_clean(p.class_name)} at x={x:.2f}, y={y:.2f} m (base {z:.2f} m above the floor)"
 
 
-def request_values(request: PlanRequest) -> dict[str, str]:
+def request_values(request: PlanRequest, answer_format: str = "full") -> dict[str, str]:
     """The template field values of a planning request."""
     kind = group_kind(request.group)
     placed = "\n".join(_describe_instance(p) for p in request.placed) or "(none)"
     support = _describe_instance(request.support) if request.support is not None else "(none)"
-    return {"group": request.group, "relations": describe_relations(kind), "objects": describe_objects(request),
+    return {"group": request.group, "relations": describe_relations(kind, answer_format),
+            "objects": describe_objects(request),
             "count": str(len(request.objects)), "room": describe_room(request.room), "placed": placed,
             "support": support}
 
@@ -160,7 +167,7 @@ def render_plan_messages(request: PlanRequest, prompt_dir: str | Path | None = N
     """System and user messages asking for the relations of ``request``'s group, in the answer
     form ``answer_format`` ("full" or "compact", ``llm.answer_format``)."""
     kind = group_kind(request.group)
-    system, user = load_template(_form(kind, answer_format), prompt_dir).render(request_values(request))
+    system, user = load_template(_form(kind, answer_format), prompt_dir).render(request_values(request, answer_format))
     messages = [{"role": "system", "content": system}] if system else []
     return messages + [{"role": "user", "content": user}]
 
@@ -184,7 +191,7 @@ def render_batch_messages(requests: list[PlanRequest] | tuple[PlanRequest, ...],
     (``llm.on_top_batch``); every request must be an on-top group of the same room."""
     if not requests or any(group_kind(r.group) != "on" for r in requests):
         raise ValueError("a batch prompt holds one or more on-top groups and nothing else")
-    values = {"room": describe_room(requests[0].room), "relations": describe_relations("on"),
+    values = {"room": describe_room(requests[0].room), "relations": describe_relations("on", answer_format),
               "count": str(len(requests)), "groups": "\n\n".join(describe_group_block(r) for r in requests)}
     system, user = load_template(_form("on_batch", answer_format), prompt_dir).render(values)
     messages = [{"role": "system", "content": system}] if system else []
