@@ -81,7 +81,9 @@ def _dataset_catalog(root: Path, assets: str | None) -> Catalog | None:
 
 def summarize_dataset(spec: str, *, assets: str | None = None, max_scenes: int | None = None,
                       seed: int = 0, vlm_cfg=None) -> DatasetSummary:
-    """Read a dataset once: instance descriptors, per-scene class sets, layout scores."""
+    """Read a dataset once (a real dataset whose reader keeps the benchmark's classes twice, the
+    second time with every annotated object for layout realism): instance descriptors, per-scene
+    class sets, layout scores."""
     given, spec = spec, normalise_spec(spec)
     ds = open_dataset(spec)
     # layout realism counts every annotated object of a real scan (as of a generated one): a second
