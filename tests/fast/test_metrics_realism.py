@@ -187,13 +187,16 @@ def test_realism_reads_real_scans_with_every_annotated_object(tmp_path):
     assert realism_spec("assist3d:/d") == "assist3d:/d"
     g = np.mgrid[0:0.5:0.05, 0:0.5:0.05].reshape(2, -1).T  # a 50 cm square of 5 cm cells: 100 voxels
     floor = np.c_[np.mgrid[0:4:0.05, 0:3:0.05].reshape(2, -1).T, np.zeros(4800)]
-    table = np.c_[g + [1.0, 1.0], np.full(len(g), 0.7)]
+    top = np.mgrid[0:1.0:0.05, 0:0.4:0.05].reshape(2, -1).T  # elongated: it has a main axis
+    table = np.c_[top + [1.0, 1.0], np.full(len(top), 0.7)]
     lamp = np.c_[g + [3.0, 2.0], np.full(len(g), 0.3)]
     rows = [np.c_[floor, np.zeros((len(floor), 3)), np.full(len(floor), 2), np.zeros(len(floor))],
-            np.c_[table, np.zeros((len(g), 3)), np.full(len(g), 7), np.full(len(g), 5)],
+            np.c_[table, np.zeros((len(top), 3)), np.full(len(top), 7), np.full(len(top), 5)],
             np.c_[lamp, np.zeros((len(g), 3)), np.zeros(len(g)), np.full(len(g), 9)]]
     np.save(tmp_path / "scene0001_00.npy", np.concatenate(rows).astype(np.float32))
     assert stats_of_dataset(f"array:{tmp_path}").objects == 2
     assert stats_of_dataset(f"array:{tmp_path}?objects=benchmark").objects == 1
     summary = summarize_dataset(f"array:{tmp_path}")
     assert summary.realism.objects == 2 and summary.instances == 1
+    from assist3d.bench.metrics.realism import load_reference
+    assert load_reference(f"array:{tmp_path}").source == f"array:{tmp_path}?objects=annotated"  # says which reading

@@ -350,4 +350,4 @@ def load_reference(spec: str | None, max_scenes: int | None = None) -> RealismRe
         return RealismReference.load()
     if spec.endswith(".json") and ":" not in spec.split("/", 1)[0]:
         return RealismReference.load(spec)
-    return RealismReference.from_stats(stats_of_dataset(spec, max_scenes), spec)
+    return RealismReference.from_stats(stats_of_dataset(spec, max_scenes), realism_spec(spec))  # names the reading
