@@ -45,6 +45,8 @@ from .schema import CheckedAnswer, check_answer, parse_json_text, salvage_groups
 
 log = logging.getLogger(__name__)
 
+CUT_OFF = "the answer was cut off at the token limit; answer more briefly (at most 2 relations per object)"
+
 
 class LLMPlanner:
     """Plans groups with an OpenAI-compatible chat model; ``fallback`` plans what it cannot."""
@@ -86,13 +88,9 @@ class LLMPlanner:
                     kept = f"repair answer unusable ({'; '.join(problems2[:2])}); kept the first answer"
                     log.warning("%s %s: %s", self.name, request.group, inert(kept))
                     extra_notes.append(kept)
-            if checked is None:
-                raise LLMError(f"no usable answer after one repair round ({'; '.join(problems[:3])})")
-            if not checked.order:
-                raise LLMError("the answer lists none of the objects")
+            plan, notes = self._finish(request, checked, problems, extra_notes, rng)  # raises when nothing is usable
         except LLMError as e:
             return self._fell_back(request, e, rng, usage, repairs, t0)
-        plan, notes = self._finish(request, checked, problems, extra_notes, rng)
         return self._with_stats(plan, usage, repairs, notes, t0)
 
     def plan_batch(self, requests: list[PlanRequest] | tuple[PlanRequest, ...], *,
@@ -233,8 +231,7 @@ class LLMPlanner:
 
 def _check(answer: ChatAnswer, request: PlanRequest) -> tuple[CheckedAnswer | None, list[str]]:
     """The usable part of an answer (None if nothing is) and its problems, phrased for the model."""
-    cut = (["the answer was cut off at the token limit; answer more briefly (at most 2 relations per object)"]
-           if answer.finish_reason == "length" else [])
+    cut = [CUT_OFF] if answer.finish_reason == "length" else []
     data, err = parse_json_text(answer.content)
     if err is not None:
         items = salvage_objects(answer.content)
@@ -253,8 +250,7 @@ def _check_batch(answer: ChatAnswer, requests: list[PlanRequest]
                  ) -> tuple[list[tuple[CheckedAnswer | None, list[str]]], list[str]]:
     """Each group's usable part and problems in a batch answer (in ``requests`` order), and the
     problems of the answer as a whole."""
-    general = (["the answer was cut off at the token limit; answer more briefly (at most 2 relations per object)"]
-               if answer.finish_reason == "length" else [])
+    general = [CUT_OFF] if answer.finish_reason == "length" else []
     names = [r.group for r in requests]
     data, err = parse_json_text(answer.content)
     if err is not None:

@@ -33,8 +33,6 @@ TEMPLATE_FILES = {"floor": "floor.txt", "wall": "wall.txt", "on": "on_top.txt", 
                   "floor_compact": "floor_compact.txt", "wall_compact": "wall_compact.txt",
                   "on_compact": "on_top_compact.txt", "on_batch_compact": "on_top_batch_compact.txt",
                   "vlm": "vlm_score.txt", "repair": "repair.txt", "room": "room_objects.txt"}
-#: the template of each planning prompt in the compact answer form (``llm.answer_format: compact``)
-COMPACT = {"floor": "floor_compact", "wall": "wall_compact", "on": "on_compact", "on_batch": "on_batch_compact"}
 _NAME_MAX = 60
 
 
@@ -180,9 +178,10 @@ def describe_group_block(request: PlanRequest) -> str:
 
 
 def _form(name: str, answer_format: str) -> str:
+    """The template of planning prompt ``name`` in ``answer_format`` (compact ones are ``<name>_compact``)."""
     if answer_format not in ("full", "compact"):
         raise ConfigError(f"llm.answer_format must be 'full' or 'compact', not {answer_format!r}")
-    return COMPACT[name] if answer_format == "compact" else name
+    return f"{name}_compact" if answer_format == "compact" else name
 
 
 def render_batch_messages(requests: list[PlanRequest] | tuple[PlanRequest, ...],

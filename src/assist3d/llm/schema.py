@@ -185,7 +185,8 @@ def _is_int(v: Any) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
 
-COMPACT_ENTRY = '[<index>, <relation>, ...] with a relation written "name", ["name", target] or ["height", min, max]'
+COMPACT_RELATION = '"name", ["name", target] or ["height", min, max]'
+COMPACT_ENTRY = f"[<index>, <relation>, ...] with a relation written {COMPACT_RELATION}"
 
 
 def expand_compact_entry(item: list, k: int) -> tuple[dict | None, list[str]]:
@@ -201,8 +202,7 @@ def expand_compact_entry(item: list, k: int) -> tuple[dict | None, list[str]]:
             rels.append({"relation": r})
             continue
         if not isinstance(r, list) or not r or not isinstance(r[0], str):
-            problems.append(f"object {idx}: a relation must be \"name\", [\"name\", target] or "
-                            f"[\"height\", min, max], got {json.dumps(r)[:80]}")
+            problems.append(f"object {idx}: a relation must be {COMPACT_RELATION}, got {json.dumps(r)[:80]}")
             continue
         name, args = r[0], list(r[1:])
         rel: dict[str, Any] = {"relation": name}

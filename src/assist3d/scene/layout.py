@@ -140,7 +140,7 @@ class _Run:
         if batch <= 1 and (workers <= 1 or len(requests) <= 1):
             return {}  # planned one by one as they are placed
         t0 = time.perf_counter()
-        chunks = [requests[i:i + max(1, batch)] for i in range(0, len(requests), max(1, batch))]
+        chunks = [requests[i:i + batch] for i in range(0, len(requests), batch)]  # batch >= 1 (llm.on_top_batch)
         planned: dict[str, _Planned] = {}
         with ThreadPoolExecutor(max_workers=max(1, min(workers, len(chunks))), thread_name_prefix="plan") as pool:
             for part in pool.map(self.plan_ahead_many, chunks):

@@ -88,7 +88,8 @@ def summarize_dataset(spec: str, *, assets: str | None = None, max_scenes: int |
     ds = open_dataset(spec)
     # layout realism counts every annotated object of a real scan (as of a generated one): a second
     # reading where the reader keeps only the benchmark's classes by default
-    realism_ds = open_dataset(realism_spec(spec)) if realism_spec(spec) != spec else None
+    counted_as = realism_spec(spec)
+    realism_ds = open_dataset(counted_as) if counted_as != spec else None
     summary = DatasetSummary(name=given, spec=spec)
     fmt = spec.split(":", 1)[0]
     catalog = None
