@@ -19,7 +19,9 @@ scans (derived statistics only: no point of a scan is stored). ``--loro`` scores
 reference built from the other rooms (rescans of a room share the first 9 characters of their
 name, as in ScanNet), which is how a real scan's score should be read: a scan scored against a
 reference that contains it scores near 100 by construction. ``--score`` scores other datasets
-against the reference built from the given scans (as ``assist3d metrics --realism-reference``).
+against the reference built from the given scans (as ``assist3d metrics --realism-reference``), with the
+score's standard error over the dataset's scenes (``realism.realism_standard_error``, seeded as
+``assist3d metrics --seed 0``).
 ``--loro --score ... --matched B`` also scores every dataset against each held-out room's reference
 (the other rooms) at the held-out room's sample size (``realism.matched_sample``, B random draws,
 seeded): the KS distance grows as a sample shrinks, so a room of a dozen objects and a dataset of
@@ -38,7 +40,8 @@ import numpy as np
 from assist3d.bench.data import open_dataset
 from assist3d.core.fileio import write_json_atomic
 from assist3d.bench.metrics.realism import (RealismReference, RealismStats, matched_sample, realism_score, realism_spec,
-                                            scene_stats, stats_of_dataset)
+                                            realism_standard_error, scene_stats, stats_of_dataset)
+from assist3d.core.rng import make_rng
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -84,8 +87,9 @@ def main(argv: list[str] | None = None) -> int:
         report["scores"] = {}
         for spec, st in scored.items():
             score, parts, why = realism_score(st, ref)
-            report["scores"][spec] = {"layout_realism": score, "components": parts, "reason": why,
-                                      "scenes": st.scenes, "objects": st.objects}
+            se = realism_standard_error(st, ref, make_rng(0, "layout_realism_se"))[0] if score is not None else None
+            report["scores"][spec] = {"layout_realism": score, "layout_realism_se": se, "components": parts,
+                                      "reason": why, "scenes": st.scenes, "objects": st.objects}
     if args.matched:
         report["matched"] = {"draws": args.matched, "datasets": {}}
         for spec, st in scored.items():
@@ -104,7 +108,8 @@ def main(argv: list[str] | None = None) -> int:
         if "loro_mean" in report:
             print(f"mean over rooms: {report['loro_mean']}")
         for spec, v in (report.get("scores") or {}).items():
-            print(f"{spec}: {v['layout_realism']}  ({v['scenes']} scenes, {v['objects']} objects) {v['components']}")
+            print(f"{spec}: {v['layout_realism']} +- {v['layout_realism_se']} (s.e. over scenes)  ({v['scenes']} scenes, "
+                  f"{v['objects']} objects) {v['components']}")
         if "matched" in report:
             print(f"at each held-out room's size ({args.matched} draws), mean over draws per room:")
             for spec, v in report["matched"]["datasets"].items():

@@ -200,3 +200,59 @@ def test_realism_reads_real_scans_with_every_annotated_object(tmp_path):
     assert summary.realism.objects == 2 and summary.instances == 1
     from assist3d.bench.metrics.realism import load_reference
     assert load_reference(f"array:{tmp_path}").source == f"array:{tmp_path}?objects=annotated"  # says which reading
+
+
+def _scenes(rng, n_scenes, shift=0.0, objects=(4, 30)):
+    """``n_scenes`` toy scenes pooled as ``dataset_stats`` pools them: each scene a random number of
+    objects, each statistic normal around a per-scene mean (scenes differ, as rooms do)."""
+    from assist3d.bench.metrics.realism import OBJECT_STATS, _one_scene
+    total = RealismStats()
+    for _ in range(n_scenes):
+        st = RealismStats(scenes=1)
+        n = int(rng.integers(*objects))
+        room = rng.normal(shift, 0.3)  # this scene's offset: values of one scene go together
+        for k in OBJECT_STATS:
+            st.values[k] = list(rng.normal(1.0 + room, 0.3, n))
+        st.values["coverage"] = [float(rng.normal(1.0 + room, 0.3))]
+        st.objects = n
+        total.add(_one_scene(st))
+    return total
+
+
+def test_standard_error_tracks_the_spread_of_scores_over_fresh_draws_of_scenes():
+    """The scene-bootstrap standard error of one dataset is of the order of the standard deviation
+    of the score over independent datasets from the same generator, shrinks with more scenes, and is
+    reproducible from its seed; it is refused where it would mean nothing."""
+    from assist3d.bench.metrics.realism import matched_sample, realism_standard_error
+    rng = np.random.default_rng(7)
+    ref_stats = RealismStats()
+    for k in STATS:
+        ref_stats.values[k] = list(rng.normal(1.0, 0.42, 5000))
+    ref = RealismReference.from_stats(ref_stats, "toy")
+    fresh = [realism_score(_scenes(rng, 20, shift=0.2), ref)[0] for _ in range(60)]
+    true_sd = float(np.std(fresh, ddof=1))
+    ses = [realism_standard_error(_scenes(rng, 20, shift=0.2), ref, np.random.default_rng(s), draws=200)[0]
+           for s in range(8)]
+    assert true_sd > 1.0  # the toy datasets do vary by more than rounding
+    assert 0.6 * true_sd < float(np.mean(ses)) < 1.6 * true_sd, (ses, true_sd)
+    big = _scenes(rng, 80, shift=0.2)
+    se_big = realism_standard_error(big, ref, np.random.default_rng(0), draws=200)[0]
+    assert se_big < 0.7 * float(np.mean(ses))  # 4x the scenes: about half the error
+    again = [realism_standard_error(big, ref, np.random.default_rng(0), draws=200)[0] for _ in range(2)]
+    assert again == [se_big, se_big]
+    one = _scenes(rng, 1)
+    assert realism_standard_error(one, ref, rng) == (None, "fewer than 2 scenes")
+    unscened = matched_sample(big, _scenes(rng, 5), rng)  # values without their scenes
+    assert realism_standard_error(unscened, ref, rng)[0] is None and not unscened.has_scenes()
+
+
+def test_scene_statistics_record_which_values_each_scene_gave():
+    rng = np.random.default_rng(4)
+    a = scene_stats(*_room([((1.0, 0.35), (1.6, 0.6, 0.8), 0.0, 0.0), ((3.5, 2.0), (1.2, 0.5, 0.4), 30.0, 0.0)], rng))
+    b = scene_stats(*_room([((2.0, 2.0), (1.0, 0.4, 0.5), 10.0, 0.0)], rng))
+    empty = scene_stats(np.zeros((3, 3)), np.zeros(3, np.int64))  # too few points: a scene with no values
+    total = RealismStats()
+    for st in (a, b, empty):
+        total.add(st)
+    assert total.scenes == 3 and total.has_scenes()
+    assert total.per_scene["height"] == [2, 1, 0] and total.per_scene["coverage"] == [1, 1, 0]

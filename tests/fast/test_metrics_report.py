@@ -101,6 +101,9 @@ def test_metrics_cli_json_keys_are_the_datasets_as_given(tmp_path, monkeypatch):
     for row in table.values():  # layout_realism: a number, or null with the reason
         assert "layout_realism" in row
         assert row["layout_realism"] is not None or row["notes"]["layout_realism"]
+        # its standard error over scenes: null with the reason for a one-scene dataset
+        assert row["layout_realism_se"] is None
+        assert row["layout_realism"] is None or row["notes"]["layout_realism_se"] == "fewer than 2 scenes"
 
 
 def test_plot_labels_are_short_when_unambiguous():

@@ -35,7 +35,8 @@ def metrics(
     plot: Optional[Path] = typer.Option(None, "--plot", help="Also write a PNG of per-dataset distributions."),
     max_scenes: Optional[int] = typer.Option(None, "--max-scenes", min=1, max=MAX_SCENES,
                                              help="Use at most this many scenes per dataset."),
-    seed: int = typer.Option(0, "--seed", min=0, max=MAX_SEED, help="Seed of point subsampling and the codebook."),
+    seed: int = typer.Option(0, "--seed", min=0, max=MAX_SEED, help="Seed of point subsampling, the codebook and the "
+                                                                   "scene resampling behind layout_realism_se."),
     llm_base_url: Optional[str] = typer.Option(None, "--llm-base-url", help="Also ask a vision-language model for a "
                                                                            "layout score (OpenAI-compatible)."),
     llm_model: Optional[str] = typer.Option(None, "--llm-model", help="Vision model name for --llm-base-url."),
@@ -58,7 +59,7 @@ def metrics(
     cb = Codebook.load(codebook) if codebook else shared_codebook(summaries, seed=seed)
     if save_codebook:
         cb.save(save_codebook)
-    table = metrics_table(summaries, cb, load_reference(realism_reference, max_scenes=max_scenes))
+    table = metrics_table(summaries, cb, load_reference(realism_reference, max_scenes=max_scenes), seed=seed)
     if plot:
         plot_summaries(summaries, cb, plot)
     if as_json:
@@ -66,12 +67,15 @@ def metrics(
         return
     t = Table(title="Dataset comparison (geometry diversity up, context complexity down, layout score and realism up)")
     for col in ("dataset", "scenes", "instances", "geometry diversity", "context complexity", "layout score",
-                "layout realism"):
+                "layout realism (± s.e.)"):
         t.add_column(col, justify="right" if col != "dataset" else "left")
     fmt = lambda v, p: "n/a" if v is None else f"{v:.{p}f}"  # noqa: E731
     for name, row in table.items():
+        realism = fmt(row["layout_realism"], 1)
+        if row["layout_realism_se"] is not None:
+            realism += f" ± {row['layout_realism_se']:.1f}"
         t.add_row(shown(name, markup=True), str(row["scenes"]), str(row["instances"]), fmt(row["geometry_diversity"], 3),
-                  fmt(row["context_complexity"], 3), fmt(row["layout_score"], 1), fmt(row["layout_realism"], 1))
+                  fmt(row["context_complexity"], 3), fmt(row["layout_score"], 1), realism)
     Console().print(t)
     for name, row in table.items():
         for k, why in (row.get("notes") or {}).items():

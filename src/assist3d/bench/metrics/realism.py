@@ -37,6 +37,11 @@ or any labelled dataset) by the Kolmogorov-Smirnov distance per statistic, and
 
 so 100 means indistinguishable distributions. The KS distance needs no binning and no scale per
 statistic, and it is bounded, so one statistic cannot dominate.
+
+How much the score would move if the dataset's scenes were drawn again is estimated by
+:func:`realism_standard_error`: the standard deviation of the score over resamplings of the dataset's
+scenes with replacement (the reference held fixed), so two datasets whose scores differ by less than
+about twice their combined standard error are not told apart by it.
 """
 
 from __future__ import annotations
@@ -65,21 +70,34 @@ SCENE_STATS = ("coverage",)
 STATS = OBJECT_STATS + SCENE_STATS
 QUANTILES = 101
 REFERENCE_VERSION = 1
+BOOTSTRAP_DRAWS = 500  # scene resamplings behind a standard error
 
 
 @dataclass
 class RealismStats:
-    """Pooled arrangement statistics of a set of scenes (one list of values per statistic)."""
+    """Pooled arrangement statistics of a set of scenes (one list of values per statistic).
+
+    ``per_scene[k]`` holds how many of ``values[k]`` each scene gave, in order, when the statistics
+    were pooled scene by scene (:func:`scene_stats`, :meth:`add`); it is empty for a sample without
+    scene structure (:func:`matched_sample`), which then has no standard error.
+    """
 
     values: dict[str, list[float]] = field(default_factory=lambda: {k: [] for k in STATS})
     scenes: int = 0
     objects: int = 0
+    per_scene: dict[str, list[int]] = field(default_factory=lambda: {k: [] for k in STATS})
 
     def add(self, other: "RealismStats") -> None:
         for k in STATS:
             self.values[k].extend(other.values[k])
+            self.per_scene[k].extend(other.per_scene[k])
         self.scenes += other.scenes
         self.objects += other.objects
+
+    def has_scenes(self) -> bool:
+        """Whether every value is attributed to one of ``scenes`` scenes (a standard error can be had)."""
+        return all(len(self.per_scene[k]) == self.scenes and sum(self.per_scene[k]) == len(self.values[k])
+                   for k in STATS)
 
     def arrays(self) -> dict[str, np.ndarray]:
         return {k: np.asarray(v, np.float64) for k, v in self.values.items()}
@@ -139,7 +157,7 @@ def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
     finite = np.isfinite(coord).all(1)
     coord, instance = coord[finite], np.where(instance[finite] < 0, -1, instance[finite])
     if len(coord) < 10:
-        return out
+        return _one_scene(out)
     pts, inst = _voxel_points(coord, instance)
     floor = float(np.percentile(pts[:, 2], 2.0))
     h = pts[:, 2] - floor
@@ -211,7 +229,13 @@ def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
         if len(idx):
             taken = obj_cells[idx] > 0
             out.values["free_space"].append(float(1.0 - taken.mean()))
-    return out
+    return _one_scene(out)
+
+
+def _one_scene(stats: RealismStats) -> RealismStats:
+    """``stats`` of one scene with its value counts recorded as that scene's."""
+    stats.per_scene = {k: [len(stats.values[k])] for k in STATS}
+    return stats
 
 
 # --------------------------------------------------------------------------------------------
@@ -295,6 +319,39 @@ def realism_score(stats: RealismStats, reference: RealismReference) -> tuple[flo
         return None, {}, f"no values for {', '.join(missing)}"
     ks = {k: round(_ks_to_quantiles(arrs[k], reference.quantiles[k]), 4) for k in STATS}
     return round(100.0 * (1.0 - float(np.mean(list(ks.values())))), 2), ks, None
+
+
+def realism_standard_error(stats: RealismStats, reference: RealismReference, rng: np.random.Generator,
+                           draws: int = BOOTSTRAP_DRAWS) -> tuple[float | None, str | None]:
+    """``(standard error of layout_realism, reason when None)``: the standard deviation of the score
+    over ``draws`` resamplings of the dataset's scenes with replacement (each scene's values go
+    together, the reference is held fixed). It says how much the score would move with other scenes
+    from the same generator; it does not cover the reference's own sampling (10 real scans for the
+    shipped one). None for fewer than 2 scenes or a sample without scene structure.
+    """
+    if stats.scenes < 2:
+        return None, "fewer than 2 scenes"
+    if not stats.has_scenes():
+        return None, "values not attributed to scenes"
+    arrs = stats.arrays()
+    counts = {k: np.asarray(stats.per_scene[k], np.int64) for k in STATS}
+    starts = {k: np.r_[0, np.cumsum(counts[k])[:-1]] for k in STATS}
+    scores = []
+    for _ in range(draws):
+        pick = rng.integers(0, stats.scenes, stats.scenes)
+        ks = []
+        for k in STATS:
+            n, first = counts[k][pick], starts[k][pick]
+            if n.sum() == 0:  # no value of this statistic in the resample: the score is undefined there
+                break
+            # the picked scenes' value ranges, concatenated: offset of each value within its scene + its start
+            idx = np.arange(n.sum()) + np.repeat(first - np.r_[0, np.cumsum(n)[:-1]], n)
+            ks.append(_ks_to_quantiles(arrs[k][idx], reference.quantiles[k]))
+        else:
+            scores.append(100.0 * (1.0 - float(np.mean(ks))))
+    if len(scores) < draws // 2:
+        return None, "too few scenes with every statistic"
+    return round(float(np.std(scores, ddof=1)), 2), None
 
 
 def matched_sample(stats: RealismStats, like: RealismStats, rng: np.random.Generator) -> RealismStats:

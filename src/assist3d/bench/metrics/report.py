@@ -24,7 +24,8 @@ from .context import context_complexity, per_class_max_cooccurrence
 from .diversity import Codebook, fit_codebook, geometry_diversity
 from .features import FEATURE_DIM, instance_descriptors
 from .plausibility import score_layout
-from .realism import RealismReference, RealismStats, realism_score, realism_spec, scene_stats
+from .realism import (RealismReference, RealismStats, realism_score, realism_spec, realism_standard_error,
+                      scene_stats)
 
 log = logging.getLogger(__name__)
 
@@ -171,18 +172,24 @@ def shared_codebook(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: in
 
 
 def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
-                  reference: RealismReference | None = None) -> dict:
+                  reference: RealismReference | None = None, seed: int = 0) -> dict:
     """``{name: {"geometry_diversity", "context_complexity", "layout_score", "layout_realism", "scenes",
     "instances", ...}}`` keyed by each dataset as the user named it (``"dataset"`` holds its
     ``FORMAT:PATH`` form); a metric that cannot be computed is None, with the reason under
-    ``"notes"``. ``reference`` defaults to the shipped real-scan statistics."""
+    ``"notes"``. ``reference`` defaults to the shipped real-scan statistics; ``seed`` seeds the
+    scene resampling behind ``layout_realism_se`` (the same stream for every dataset)."""
     reference = reference if reference is not None else RealismReference.load()
     out = {}
     for s in summaries:
         notes = {}
         realism, realism_parts, why = realism_score(s.realism, reference)
+        realism_se = None
         if realism is None:
             notes["layout_realism"] = why
+        else:
+            realism_se, why_se = realism_standard_error(s.realism, reference, make_rng(seed, "layout_realism_se"))
+            if realism_se is None:
+                notes["layout_realism_se"] = why_se
         gd = geometry_diversity(s.features, codebook) if len(s.features) else None
         if gd is None:
             notes["geometry_diversity"] = "no instance with enough points"
@@ -205,6 +212,7 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
             "layout_components": comps,
             "vlm_layout_score": round(float(np.mean(s.vlm_scores)), 2) if s.vlm_scores else None,
             "layout_realism": realism,
+            "layout_realism_se": realism_se,
             "layout_realism_components": realism_parts or None,
             "layout_realism_reference": reference.source,
             "codes": len(codebook.centers),
