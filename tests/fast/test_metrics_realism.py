@@ -256,3 +256,49 @@ def test_scene_statistics_record_which_values_each_scene_gave():
         total.add(st)
     assert total.scenes == 3 and total.has_scenes()
     assert total.per_scene["height"] == [2, 1, 0] and total.per_scene["coverage"] == [1, 1, 0]
+
+
+def test_room_structure_labelled_as_an_object_is_flagged_and_furniture_is_not():
+    """A ceiling or a set of walls carrying an instance id (formats that cannot name a ceiling give
+    them) is listed in ``structure_suspects``; a tall wardrobe against a wall and a large low rug are
+    not. The statistics still count them (a warning, not a silent change)."""
+    rng = np.random.default_rng(5)
+    furniture = [((0.6, 0.35), (1.0, 0.6, 2.5), 0.0, 0.0),    # a wardrobe almost to the top, against a wall
+                 ((2.5, 2.0), (3.0, 2.5, 0.02), 0.0, 0.0),    # a large rug
+                 ((4.0, 3.0), (0.8, 0.8, 0.75), 0.0, 0.0)]    # a table
+    furniture.append(((2.5, 2.0), (0.4, 0.4, 0.3), 0.0, 2.3))  # a ceiling lamp: at the top, small
+    coord, inst = _room(furniture, rng)
+    t = rng.uniform(0, 1, 3000)
+    screen = np.c_[0.5 + 4 * t, 0.5 + 3 * t, rng.uniform(0, 2.55, 3000)]  # floor to top across the room, not along it
+    bench = np.c_[rng.uniform(0, 5, 3000), rng.uniform(0.05, 0.4, 3000), rng.uniform(0, 0.45, 3000)]  # low, along a wall
+    bench[1500:] = np.c_[rng.uniform(0.05, 0.4, 1500), rng.uniform(0, 4, 1500), rng.uniform(0, 0.45, 1500)]
+    shelf = bench + [0.0, 0.0, 2.1]  # high shelves along the same walls, up to the top
+    loft = _box_points((3.8, 2.7), (2.2, 2.5, 2.55), 0.0, 0.0, rng, n=30000)  # floor to top over a quarter of the floor
+    coord = np.concatenate([coord, screen, bench, shelf, loft])
+    inst = np.concatenate([inst, np.full(3000, 11), np.full(3000, 12), np.full(3000, 13), np.full(30000, 14)])
+    plain = scene_stats(coord, inst)
+    assert plain.structure_suspects == [] and plain.objects == 8
+    furniture = furniture[:3]
+    ceiling = ((2.5, 2.0), (4.9, 3.9, 0.05), 0.0, 2.55)       # instance 4
+    coord, inst = _room(furniture + [ceiling], rng)
+    walls = np.c_[rng.uniform(0, 5, 4000), np.zeros(4000), rng.uniform(0, 2.6, 4000)]  # the y = 0 and x = 0 walls
+    walls[2000:] = np.c_[np.zeros(2000), rng.uniform(0, 4, 2000), rng.uniform(0, 2.6, 2000)]
+    coord, inst = np.concatenate([coord, walls]), np.concatenate([inst, np.full(4000, 5)])
+    flagged = scene_stats(coord, inst)
+    assert sorted(flagged.structure_suspects) == [4, 5]
+    assert flagged.objects == 5  # still counted
+
+
+def test_real_scans_structure_warning(real_dev_dir, caplog):
+    """The dev scans (the shipped reference) hold no instance that looks like room structure;
+    scene0451_01 labels its ceiling and a floor-to-ceiling element with label 0, and reading it for
+    layout realism warns, naming the scene and both ids."""
+    from assist3d.bench.metrics.realism import stats_of_dataset
+    assert stats_of_dataset(f"array:{real_dev_dir}").structure_suspects == []
+    scan = real_dev_dir.parent / "scannet_scene0451_01.npy"
+    if not scan.exists():
+        pytest.skip("scene0451_01 not present")
+    with caplog.at_level("WARNING", logger="assist3d.bench.metrics.realism"):
+        st = stats_of_dataset(f"array:{scan}")
+    assert sorted(st.structure_suspects) == [1, 39]
+    assert "scannet_scene0451_01: instance(s) 1, 39 look like room structure" in caplog.text

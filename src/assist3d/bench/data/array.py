@@ -9,7 +9,8 @@ the ScanNet-20 index (semantic - 1; -1 for label 0). With ``array:PATH?objects=a
 annotated instance (id >= 1) counts except walls and floors (labels 1, 2): also the objects of
 classes outside the 20 (label 0: lamps, boxes, pillows, ...), which arrangement statistics need
 (the layout realism score) and the benchmark leaves out; a ceiling, which the ScanNet-20 labels
-cannot name, counts too (``scannet:`` leaves it out). The default is ``objects=benchmark``.
+cannot name, counts too (``scannet:`` leaves it out; layout realism warns when an instance looks like
+one). The default is ``objects=benchmark``.
 
 Validation (``docs/evaluation.md``, "Input validation"): an array that is not ``(N, 8)`` real
 numbers, has no rows, non-finite or far-out coordinates, fractional or non-finite labels, semantic

@@ -47,6 +47,7 @@ about twice their combined standard error are not told apart by it.
 from __future__ import annotations
 
 import json
+import logging
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -71,6 +72,14 @@ STATS = OBJECT_STATS + SCENE_STATS
 QUANTILES = 101
 REFERENCE_VERSION = 1
 BOOTSTRAP_DRAWS = 500  # scene resamplings behind a standard error
+# room structure labelled as an object (a ceiling, walls from floor to ceiling): warned about, still counted
+STRUCTURE_GAP = 0.1  # m: as close to the scan's top (99.5th height percentile), or to the floor
+CEILING_LOW = 1.8  # m above the floor: a ceiling's lowest point ...
+CEILING_SHARE = 0.25  # ... over at least this share of the floor-plan cells
+WALLS_BOX_SHARE = 0.5  # floor to top over at least this share of the scan's horizontal bounding box ...
+WALLS_HUG = 0.2  # m: ... with its points along the room's outline (median distance to it)
+
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -86,11 +95,14 @@ class RealismStats:
     scenes: int = 0
     objects: int = 0
     per_scene: dict[str, list[int]] = field(default_factory=lambda: {k: [] for k in STATS})
+    #: instance ids that look like room structure labelled as objects (see :func:`scene_stats`)
+    structure_suspects: list[int] = field(default_factory=list)
 
     def add(self, other: "RealismStats") -> None:
         for k in STATS:
             self.values[k].extend(other.values[k])
             self.per_scene[k].extend(other.per_scene[k])
+        self.structure_suspects.extend(other.structure_suspects)
         self.scenes += other.scenes
         self.objects += other.objects
 
@@ -147,7 +159,15 @@ def _wall_directions(wall_xy: np.ndarray) -> float | None:
 
 
 def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
-    """The statistics of one scene; ``instance`` (N,) with -1 (or any negative) for no object."""
+    """The statistics of one scene; ``instance`` (N,) with -1 (or any negative) for no object.
+
+    Instances that look like room structure rather than objects are counted as objects all the same
+    and listed in ``structure_suspects`` (callers warn, naming the scene): one that reaches the scan's
+    top from at least ``CEILING_LOW`` above the floor over ``CEILING_SHARE`` of the floor plan (a
+    ceiling), or that runs from the floor to the top over ``WALLS_BOX_SHARE`` of the scan's bounding
+    box, its points along the room's outline (walls). Formats that cannot name a ceiling (``array:``, label 0) give such instances; none of
+    the real dev scans or the generated preset datasets has one.
+    """
     coord = np.asarray(coord, np.float64)
     instance = np.asarray(instance, np.int64)
     if coord.ndim != 2 or coord.shape[1] != 3 or len(coord) != len(instance):
@@ -161,6 +181,8 @@ def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
     pts, inst = _voxel_points(coord, instance)
     floor = float(np.percentile(pts[:, 2], 2.0))
     h = pts[:, 2] - floor
+    top = float(np.percentile(h, 99.5))
+    box_area = float(np.prod(pts[:, :2].max(0) - pts[:, :2].min(0)))
     bg = inst < 0
     wall = bg & (h >= WALL_BAND[0]) & (h <= WALL_BAND[1])
 
@@ -202,6 +224,12 @@ def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
         out.objects += 1
         z = pts[inst == o, 2]
         out.values["height"].append(float(max(z.min() - floor, 0.0)))
+        low, high = float(z.min() - floor), float(z.max() - floor)
+        if high >= top - STRUCTURE_GAP and (
+                (low >= CEILING_LOW and len(cell_sets[o]) >= CEILING_SHARE * len(all_cells))
+                or (low <= STRUCTURE_GAP and float(np.prod(xy.max(0) - xy.min(0))) >= WALLS_BOX_SHARE * box_area
+                    and wall_tree is not None and float(np.median(wall_tree.query(xy, k=1)[0])) <= WALLS_HUG)):
+            out.structure_suspects.append(int(o))
         if wall_tree is not None:
             out.values["wall_distance"].append(float(wall_tree.query(xy, k=1)[0].min()))
         c = xy - xy.mean(0)
@@ -382,6 +410,15 @@ def dataset_stats(samples: Iterable[tuple[np.ndarray, np.ndarray]]) -> RealismSt
     return total
 
 
+def warn_structure(where: str, stats: RealismStats) -> None:
+    """One warning naming ``where`` (a scene) when its statistics count room structure as objects."""
+    if stats.structure_suspects:
+        log.warning("%s: instance(s) %s look like room structure (a ceiling, or walls from floor to ceiling) labelled "
+                    "as objects; layout realism counts them as objects: set their instance id to 0, or read the scan "
+                    "with a format that names ceilings (scannet: with its label map)", where,
+                    ", ".join(str(i) for i in stats.structure_suspects))
+
+
 def realism_spec(spec: str) -> str:
     """``spec`` as this score reads it: with ``objects=annotated`` added when its format takes the
     ``objects`` option (the ScanNet-protocol readers) and the spec does not set it, so that a real
@@ -396,8 +433,13 @@ def stats_of_dataset(spec: str, max_scenes: int | None = None) -> RealismStats:
     """Pooled statistics of the first ``max_scenes`` scenes of a labelled dataset ``FORMAT:PATH``
     (read through :func:`realism_spec`)."""
     ds = open_dataset(realism_spec(spec))
-    ids = list(ds.scene_ids)[: max_scenes or None]
-    return dataset_stats((s.coord, s.instance) for s in (ds.load(i) for i in ids))
+    total = RealismStats()
+    for sid in list(ds.scene_ids)[: max_scenes or None]:
+        s = ds.load(sid)
+        st = scene_stats(s.coord, s.instance)
+        warn_structure(f"{spec} scene {sid}", st)
+        total.add(st)
+    return total
 
 
 def load_reference(spec: str | None, max_scenes: int | None = None) -> RealismReference:
