@@ -203,7 +203,7 @@ def test_realism_reads_real_scans_with_every_annotated_object(tmp_path):
 
 
 def _scenes(rng, n_scenes, shift=0.0, objects=(4, 30)):
-    """``n_scenes`` toy scenes pooled as ``dataset_stats`` pools them: each scene a random number of
+    """``n_scenes`` toy scenes pooled as ``stats_of_dataset`` pools them: each scene a random number of
     objects, each statistic normal around a per-scene mean (scenes differ, as rooms do)."""
     from assist3d.bench.metrics.realism import OBJECT_STATS, _one_scene
     total = RealismStats()

@@ -51,7 +51,6 @@ import logging
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Iterable
 
 import numpy as np
 from scipy import ndimage
@@ -165,8 +164,8 @@ def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
     and listed in ``structure_suspects`` (callers warn, naming the scene): one that reaches the scan's
     top from at least ``CEILING_LOW`` above the floor over ``CEILING_SHARE`` of the floor plan (a
     ceiling), or that runs from the floor to the top over ``WALLS_BOX_SHARE`` of the scan's bounding
-    box, its points along the room's outline (walls). Formats that cannot name a ceiling (``array:``, label 0) give such instances; none of
-    the real dev scans or the generated preset datasets has one.
+    box, its points along the room's outline (walls). Formats that cannot name a ceiling (``array:``,
+    label 0) give such instances; none of the real dev scans or the generated preset datasets has one.
     """
     coord = np.asarray(coord, np.float64)
     instance = np.asarray(instance, np.int64)
@@ -400,14 +399,6 @@ def matched_sample(stats: RealismStats, like: RealismStats, rng: np.random.Gener
         out.values[k] = src[k][rng.choice(len(src[k]), size=n, replace=False)].tolist()
     out.scenes, out.objects = like.scenes, like.objects
     return out
-
-
-def dataset_stats(samples: Iterable[tuple[np.ndarray, np.ndarray]]) -> RealismStats:
-    """Pooled statistics over ``(coord, instance)`` pairs."""
-    total = RealismStats()
-    for coord, inst in samples:
-        total.add(scene_stats(coord, inst))
-    return total
 
 
 def warn_structure(where: str, stats: RealismStats) -> None:
