@@ -1,6 +1,6 @@
 """scene0451_01 (outside the shipped reference) against the shipped reference, and the preset sets at its size.
 
-    python docs/results/realism-draws-2026-11-29/run-scene0451.py D0 D1 > out.json
+    python docs/results/realism-draws-2026-11-29/run-heldout-room.py D0 D1 > out.json
 """
 import json
 import sys

@@ -1,7 +1,7 @@
-"""Analysis: run-scene0451.py with scene0451_01's ceiling (instance 39) and floor-to-ceiling element (instance 1),
+"""Analysis: run-heldout-room.py with scene0451_01's ceiling (instance 39) and floor-to-ceiling element (instance 1),
 both label 0, read as unlabelled (found by inspection; the array format cannot name them).
 
-    python docs/results/realism-draws-2026-11-29/run-scene0451-masked.py D0 D1 > out.json
+    python docs/results/realism-draws-2026-11-29/run-heldout-room-masked.py D0 D1 > out.json
 """
 import json
 import sys
