@@ -40,8 +40,7 @@ import numpy as np
 from assist3d.bench.data import open_dataset
 from assist3d.core.fileio import write_json_atomic
 from assist3d.bench.metrics.realism import (RealismReference, RealismStats, matched_sample, realism_score, realism_spec,
-                                            realism_standard_error, scene_stats, stats_of_dataset,
-                                            warn_structure)
+                                            realism_standard_error, scene_stats, stats_of_dataset)
 from assist3d.core.rng import make_rng
 
 
@@ -59,9 +58,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.matched and not (args.loro and args.score):
         ap.error("--matched needs --loro and --score")
     ds = open_dataset(realism_spec(args.spec))
-    per_scene = {sid: scene_stats(s.coord, s.instance) for sid, s in ((i, ds.load(i)) for i in ds.scene_ids)}
-    for sid, st in per_scene.items():
-        warn_structure(f"{args.spec} scene {sid}", st)
+    per_scene = {sid: scene_stats(s.coord, s.instance, f"{args.spec} scene {sid}")
+                 for sid, s in ((i, ds.load(i)) for i in ds.scene_ids)}
     report: dict = {"spec": args.spec, "scenes": len(per_scene)}
     total = RealismStats()
     for st in per_scene.values():

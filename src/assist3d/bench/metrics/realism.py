@@ -157,11 +157,11 @@ def _wall_directions(wall_xy: np.ndarray) -> float | None:
     return float(edges[int(hist.argmax())] + 0.5)
 
 
-def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
+def scene_stats(coord: np.ndarray, instance: np.ndarray, where: str = "a scene") -> RealismStats:
     """The statistics of one scene; ``instance`` (N,) with -1 (or any negative) for no object.
 
-    Instances that look like room structure rather than objects are counted as objects all the same
-    and listed in ``structure_suspects`` (callers warn, naming the scene): one that reaches the scan's
+    Instances that look like room structure rather than objects are counted as objects all the same,
+    listed in ``structure_suspects`` and warned about, naming ``where``: one that reaches the scan's
     top from at least ``CEILING_LOW`` above the floor over ``CEILING_SHARE`` of the floor plan (a
     ceiling), or that runs from the floor to the top over ``WALLS_BOX_SHARE`` of the scan's bounding
     box, its points along the room's outline (walls). Formats that cannot name a ceiling (``array:``,
@@ -219,14 +219,14 @@ def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
     di, dj = np.mgrid[-ring:ring + 1, -ring:ring + 1]
     disc = (di * di + dj * dj) <= ring * ring
     di, dj = di[disc], dj[disc]  # cell offsets within RING, computed once for every object
-    for o, xy in obj_xy.items():
+    for k, (o, xy) in enumerate(obj_xy.items()):
         out.objects += 1
         z = pts[inst == o, 2]
-        out.values["height"].append(float(max(z.min() - floor, 0.0)))
         low, high = float(z.min() - floor), float(z.max() - floor)
+        out.values["height"].append(max(low, 0.0))
         if high >= top - STRUCTURE_GAP and (
                 (low >= CEILING_LOW and len(cell_sets[o]) >= CEILING_SHARE * len(all_cells))
-                or (low <= STRUCTURE_GAP and float(np.prod(xy.max(0) - xy.min(0))) >= WALLS_BOX_SHARE * box_area
+                or (low <= STRUCTURE_GAP and float(np.prod(hi_xy[k] - lo_xy[k])) >= WALLS_BOX_SHARE * box_area
                     and wall_tree is not None and float(np.median(wall_tree.query(xy, k=1)[0])) <= WALLS_HUG)):
             out.structure_suspects.append(int(o))
         if wall_tree is not None:
@@ -238,7 +238,6 @@ def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
             diff = abs(ang - room_angle) % 90.0
             out.values["misalignment"].append(float(min(diff, 90.0 - diff)))
         if len(order) > 1:  # nearest other object: visit them by box distance, stop when no box can be closer
-            k = order.index(o)
             gap = np.linalg.norm(np.maximum(0.0, np.maximum(lo_xy - hi_xy[k], lo_xy[k] - hi_xy)), axis=1)
             gap[k] = np.inf
             best = np.inf
@@ -256,6 +255,11 @@ def scene_stats(coord: np.ndarray, instance: np.ndarray) -> RealismStats:
         if len(idx):
             taken = obj_cells[idx] > 0
             out.values["free_space"].append(float(1.0 - taken.mean()))
+    if out.structure_suspects:
+        log.warning("%s: instance(s) %s look like room structure (a ceiling, or walls from floor to ceiling) labelled "
+                    "as objects; layout realism counts them as objects: set their instance id to 0, or read the scan "
+                    "with a format that names ceilings (scannet: with its label map)", where,
+                    ", ".join(str(i) for i in out.structure_suspects))
     return _one_scene(out)
 
 
@@ -401,15 +405,6 @@ def matched_sample(stats: RealismStats, like: RealismStats, rng: np.random.Gener
     return out
 
 
-def warn_structure(where: str, stats: RealismStats) -> None:
-    """One warning naming ``where`` (a scene) when its statistics count room structure as objects."""
-    if stats.structure_suspects:
-        log.warning("%s: instance(s) %s look like room structure (a ceiling, or walls from floor to ceiling) labelled "
-                    "as objects; layout realism counts them as objects: set their instance id to 0, or read the scan "
-                    "with a format that names ceilings (scannet: with its label map)", where,
-                    ", ".join(str(i) for i in stats.structure_suspects))
-
-
 def realism_spec(spec: str) -> str:
     """``spec`` as this score reads it: with ``objects=annotated`` added when its format takes the
     ``objects`` option (the ScanNet-protocol readers) and the spec does not set it, so that a real
@@ -427,9 +422,7 @@ def stats_of_dataset(spec: str, max_scenes: int | None = None) -> RealismStats:
     total = RealismStats()
     for sid in list(ds.scene_ids)[: max_scenes or None]:
         s = ds.load(sid)
-        st = scene_stats(s.coord, s.instance)
-        warn_structure(f"{spec} scene {sid}", st)
-        total.add(st)
+        total.add(scene_stats(s.coord, s.instance, f"{spec} scene {sid}"))
     return total
 
 

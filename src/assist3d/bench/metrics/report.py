@@ -25,7 +25,7 @@ from .diversity import Codebook, fit_codebook, geometry_diversity
 from .features import FEATURE_DIM, instance_descriptors
 from .plausibility import score_layout
 from .realism import (RealismReference, RealismStats, realism_score, realism_spec, realism_standard_error,
-                      scene_stats, warn_structure)
+                      scene_stats)
 
 log = logging.getLogger(__name__)
 
@@ -108,9 +108,7 @@ def summarize_dataset(spec: str, *, assets: str | None = None, max_scenes: int |
         inst_ids, f = instance_descriptors(sample.coord, sample.instance, rng=rng)
         feats.append(f)
         counted = sample if realism_ds is None else realism_ds.load(sid)
-        realism = scene_stats(counted.coord, counted.instance)
-        warn_structure(f"{spec} scene {sid}", realism)
-        summary.realism.add(realism)
+        summary.realism.add(scene_stats(counted.coord, counted.instance, f"{spec} scene {sid}"))
         layout = _load_layout(Path(ds.root) / sid) if fmt == "assist3d" else None
         if layout is not None:
             summary.scene_classes.append({i.class_name for i in layout.instances})
