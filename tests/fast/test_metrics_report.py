@@ -113,3 +113,26 @@ def test_plot_labels_are_short_when_unambiguous():
     # two folders of the same name in different comparisons keep their full names
     assert short_labels(["/a/assist3d", "/b/assist3d"]) == ["/a/assist3d", "/b/assist3d"]
     assert short_labels(["array:/data/scene0451_01.npy"]) == ["scene0451_01.npy"]
+
+
+def test_descriptors_do_not_depend_on_where_the_dataset_lies_or_what_else_is_read(tmp_path):
+    """The same scenes give the same shape descriptors (so the same geometry diversity) in a copy
+    of the dataset at another path, and a scene read alone gives what it gives among the others."""
+    import shutil
+
+    room = Room(((0, 0), (4, 0), (4, 3), (0, 3)), 2.6, ())
+    layouts = [SceneLayout(room, (PlacedInstance(1, "box", "box", "floor", _pose(1, 1)),
+                                  PlacedInstance(2, "tall", "tall", "floor", _pose(3, 2))), (), seed=k, seconds=0.0)
+               for k in range(2)]
+    _write_dataset(tmp_path / "ds", tmp_path / "lib", layouts)
+    shutil.copytree(tmp_path / "ds", tmp_path / "moved" / "copy")
+    shutil.copytree(tmp_path / "ds", tmp_path / "second_only")
+    shutil.rmtree(tmp_path / "second_only" / "scene_000000")
+    a, b, c = (summarize_dataset(str(tmp_path / d)) for d in ("ds", "moved/copy", "second_only"))
+    assert a.features.shape == (4, a.features.shape[1])
+    assert np.array_equal(a.features, b.features)
+    assert np.array_equal(a.features[2:], c.features)
+    # the descriptors are random draws: another seed gives other ones
+    assert not np.array_equal(a.features, summarize_dataset(str(tmp_path / "ds"), seed=1).features)
+    table = metrics_table([a, b], shared_codebook([a, b], seed=0))
+    assert table[str(tmp_path / "ds")]["geometry_diversity"] == table[str(tmp_path / "moved/copy")]["geometry_diversity"]

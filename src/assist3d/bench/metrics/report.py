@@ -101,11 +101,12 @@ def summarize_dataset(spec: str, *, assets: str | None = None, max_scenes: int |
     else:
         summary.layout_reason = f"{fmt} datasets have no layout JSON"
     ids = list(ds.scene_ids)[: max_scenes or None]
-    rng = make_rng(seed, "metrics", spec)
     feats = []
     for sid in ids:
         sample = ds.load(sid)
-        inst_ids, f = instance_descriptors(sample.coord, sample.instance, rng=rng)
+        # one stream per scene, keyed by the scene's id and never by the dataset's path: the same
+        # scenes give the same descriptors wherever the dataset lies and whichever others are read
+        inst_ids, f = instance_descriptors(sample.coord, sample.instance, rng=make_rng(seed, "metrics", str(sid)))
         feats.append(f)
         counted = sample if realism_ds is None else realism_ds.load(sid)
         summary.realism.add(scene_stats(counted.coord, counted.instance, f"{spec} scene {sid}"))
