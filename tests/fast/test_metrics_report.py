@@ -136,3 +136,20 @@ def test_descriptors_do_not_depend_on_where_the_dataset_lies_or_what_else_is_rea
     assert not np.array_equal(a.features, summarize_dataset(str(tmp_path / "ds"), seed=1).features)
     table = metrics_table([a, b], shared_codebook([a, b], seed=0))
     assert table[str(tmp_path / "ds")]["geometry_diversity"] == table[str(tmp_path / "moved/copy")]["geometry_diversity"]
+
+
+def test_shared_codebook_does_not_depend_on_the_order_datasets_are_listed_in():
+    """`assist3d metrics A B C` and `assist3d metrics C A B` code every dataset alike."""
+    from assist3d.bench.metrics.diversity import geometry_diversity
+    from assist3d.bench.metrics.features import FEATURE_DIM
+    from assist3d.bench.metrics.report import DatasetSummary
+
+    rng = np.random.default_rng(5)
+    sets = [DatasetSummary(name, features=(rng.normal(size=(m, FEATURE_DIM)) * sd).astype(np.float32))
+            for name, m, sd in (("a", 300, 1.0), ("b", 120, 0.5), ("c", 500, 2.0))]
+    books = [shared_codebook(order, seed=0) for order in (sets, sets[::-1], [sets[2], sets[0], sets[1]])]
+    for book in books[1:]:
+        assert np.array_equal(book.centers, books[0].centers)
+        for s in sets:
+            assert geometry_diversity(s.features, book) == geometry_diversity(s.features, books[0])
+    assert not np.array_equal(shared_codebook(sets, seed=1).centers, books[0].centers)  # seeded, not fixed

@@ -157,19 +157,27 @@ def _load_layout(scene_dir: Path) -> SceneLayout | None:
 
 
 def shared_codebook(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: int = 64) -> Codebook:
-    """A codebook fitted on an equal-sized random pool from each dataset."""
-    rng = make_rng(seed, "codebook")
+    """A codebook fitted on an equal-sized random pool from each dataset.
+
+    Every dataset's pool is drawn from the same seeded stream and the pooled descriptors are put in
+    one canonical order before the fit, so the codebook depends on which datasets are compared and
+    on ``seed``, never on the order they are listed in or on where they lie."""
     pools = []
     n = min([len(s.features) for s in summaries if len(s.features)] or [0])
     n = min(n, POOL_PER_DATASET)
     for s in summaries:
         if len(s.features) == 0:
             continue
-        pick = rng.choice(len(s.features), size=n, replace=False) if len(s.features) > n else np.arange(len(s.features))
+        if len(s.features) > n:
+            pick = np.sort(make_rng(seed, "codebook-pool").choice(len(s.features), size=n, replace=False))
+        else:
+            pick = np.arange(len(s.features))
         pools.append(s.features[pick])
     if not pools:
         raise DataError("no instance with enough points in any dataset: cannot fit a shape codebook")
-    return fit_codebook(np.concatenate(pools), k=k, rng=rng)
+    pool = np.concatenate(pools)
+    pool = pool[np.lexsort(pool.T[::-1])]  # rows sorted on the first column, then the second, ...
+    return fit_codebook(pool, k=k, rng=make_rng(seed, "codebook"))
 
 
 def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
