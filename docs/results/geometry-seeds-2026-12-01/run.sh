@@ -11,4 +11,7 @@ for S in 0 1; do
       | python -c "import json,sys;r=json.load(sys.stdin);print(json.dumps({k.rsplit('/',1)[-1]:v['geometry_diversity'] for k,v in r.items()}))"
   done > $R/seeds-s$S.jsonl
 done
+# the same datasets listed in reverse: the same values (the codebook does not depend on list order)
+assist3d metrics $D/cmp50s0/{no-context,holodeck-style,randomrooms,assist3d} --assets $C --json \
+  | python -c "import json,sys;r=json.load(sys.stdin);print(json.dumps({k.rsplit('/',1)[-1]:v['geometry_diversity'] for k,v in r.items()}))" > $R/reversed-s0.json
 python $R/table.py $R
