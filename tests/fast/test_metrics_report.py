@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 
 import numpy as np
 import trimesh
@@ -12,7 +13,9 @@ import trimesh
 from assist3d.assets.catalog import Catalog
 from assist3d.core.contracts import AssetRecord, MeshData, PlacedInstance, Room, SceneLayout
 from assist3d.bench.metrics.plausibility import score_layout
-from assist3d.bench.metrics.report import metrics_table, shared_codebook, summarize_dataset
+from assist3d.bench.metrics.diversity import geometry_diversity
+from assist3d.bench.metrics.features import FEATURE_DIM
+from assist3d.bench.metrics.report import DatasetSummary, metrics_table, shared_codebook, summarize_dataset
 
 
 def _pose(x, y, z=0.0):
@@ -118,8 +121,6 @@ def test_plot_labels_are_short_when_unambiguous():
 def test_descriptors_do_not_depend_on_where_the_dataset_lies_or_what_else_is_read(tmp_path):
     """The same scenes give the same shape descriptors (so the same geometry diversity) in a copy
     of the dataset at another path, and a scene read alone gives what it gives among the others."""
-    import shutil
-
     room = Room(((0, 0), (4, 0), (4, 3), (0, 3)), 2.6, ())
     layouts = [SceneLayout(room, (PlacedInstance(1, "box", "box", "floor", _pose(1, 1)),
                                   PlacedInstance(2, "tall", "tall", "floor", _pose(3, 2))), (), seed=k, seconds=0.0)
@@ -140,10 +141,6 @@ def test_descriptors_do_not_depend_on_where_the_dataset_lies_or_what_else_is_rea
 
 def test_shared_codebook_does_not_depend_on_the_order_datasets_are_listed_in():
     """`assist3d metrics A B C` and `assist3d metrics C A B` code every dataset alike."""
-    from assist3d.bench.metrics.diversity import geometry_diversity
-    from assist3d.bench.metrics.features import FEATURE_DIM
-    from assist3d.bench.metrics.report import DatasetSummary
-
     rng = np.random.default_rng(5)
     sets = [DatasetSummary(name, features=(rng.normal(size=(m, FEATURE_DIM)) * sd).astype(np.float32))
             for name, m, sd in (("a", 300, 1.0), ("b", 120, 0.5), ("c", 500, 2.0))]
