@@ -150,3 +150,48 @@ def test_shared_codebook_does_not_depend_on_the_order_datasets_are_listed_in():
         for s in sets:
             assert geometry_diversity(s.features, book) == geometry_diversity(s.features, books[0])
     assert not np.array_equal(shared_codebook(sets, seed=1).centers, books[0].centers)  # seeded, not fixed
+
+
+def test_geometry_diversity_sd_is_the_spread_over_codebook_draws():
+    """`geometry_diversity_sd`: the standard deviation of a dataset's value over draw 0 (the codebook
+    the value is read with, unchanged) and the other draws, which differ and do not depend on the order."""
+    from assist3d.bench.metrics.report import CODEBOOK_DRAWS, codebook_draws
+
+    rng = np.random.default_rng(7)
+    sets = [DatasetSummary(name, features=(rng.normal(size=(m, FEATURE_DIM)) * sd).astype(np.float32))
+            for name, m, sd in (("a", 400, 1.0), ("b", 150, 0.5), ("c", 600, 2.0))]
+    book = shared_codebook(sets, seed=3)
+    assert np.array_equal(book.centers, shared_codebook(sets, seed=3, draw=0).centers)
+    others = codebook_draws(sets, seed=3)
+    assert len(others) == CODEBOOK_DRAWS - 1
+    assert len({b.centers.tobytes() for b in [book, *others]}) == CODEBOOK_DRAWS  # every draw is another fit
+    for b, r in zip(others, codebook_draws(sets[::-1], seed=3)):
+        assert np.array_equal(b.centers, r.centers)
+    table = metrics_table(sets, book, seed=3, other_codebooks=others)
+    plain = metrics_table(sets, book, seed=3)
+    for s in sets:
+        values = [geometry_diversity(s.features, b) for b in [book, *others]]
+        assert table[s.name]["geometry_diversity"] == plain[s.name]["geometry_diversity"] == round(values[0], 4)
+        assert table[s.name]["geometry_diversity_sd"] == round(float(np.std(values, ddof=1)), 4) > 0
+        assert plain[s.name]["geometry_diversity_sd"] is None and plain[s.name]["notes"]["geometry_diversity_sd"]
+
+
+def test_metrics_cli_geometry_sd_null_with_a_given_codebook(tmp_path, monkeypatch):
+    from typer.testing import CliRunner
+
+    from assist3d.cli import app
+
+    room = Room(((0, 0), (4, 0), (4, 3), (0, 3)), 2.6, ())
+    layouts = [SceneLayout(room, (PlacedInstance(1, "box", "box", "floor", _pose(1, 1)),
+                                  PlacedInstance(2, "tall", "tall", "floor", _pose(3, 2))), (), seed=0, seconds=0.0)]
+    _write_dataset(tmp_path / "ds", tmp_path / "lib", layouts)
+    monkeypatch.chdir(tmp_path)
+    fitted = CliRunner().invoke(app, ["metrics", "ds", "--json", "--save-codebook", "book.npz"])
+    assert fitted.exit_code == 0, fitted.output
+    row = json.loads(fitted.stdout.strip().splitlines()[-1])["ds"]
+    assert row["geometry_diversity_sd"] is not None
+    given = CliRunner().invoke(app, ["metrics", "ds", "--json", "--codebook", "book.npz"])
+    assert given.exit_code == 0, given.output
+    row2 = json.loads(given.stdout.strip().splitlines()[-1])["ds"]
+    assert row2["geometry_diversity"] == row["geometry_diversity"]
+    assert row2["geometry_diversity_sd"] is None and "codebook" in row2["notes"]["geometry_diversity_sd"]

@@ -49,7 +49,7 @@ def metrics(
     """Geometry diversity, context complexity and layout reasonability of one or more datasets."""
     from ..bench.metrics.diversity import Codebook
     from ..bench.metrics.realism import load_reference
-    from ..bench.metrics.report import metrics_table, plot_summaries, shared_codebook, summarize_dataset
+    from ..bench.metrics.report import codebook_draws, metrics_table, plot_summaries, shared_codebook, summarize_dataset
 
     vlm_cfg = None
     if llm_base_url and llm_model:
@@ -59,14 +59,16 @@ def metrics(
     cb = Codebook.load(codebook) if codebook else shared_codebook(summaries, seed=seed)
     if save_codebook:
         cb.save(save_codebook)
-    table = metrics_table(summaries, cb, load_reference(realism_reference, max_scenes=max_scenes), seed=seed)
+    others = () if codebook else codebook_draws(summaries, seed=seed)  # geometry_diversity_sd
+    table = metrics_table(summaries, cb, load_reference(realism_reference, max_scenes=max_scenes), seed=seed,
+                          other_codebooks=others)
     if plot:
         plot_summaries(summaries, cb, plot)
     if as_json:
         typer.echo(json.dumps(table))
         return
     t = Table(title="Dataset comparison (geometry diversity up, context complexity down, layout score and realism up)")
-    for col in ("dataset", "scenes", "instances", "geometry diversity", "context complexity", "layout score",
+    for col in ("dataset", "scenes", "instances", "geometry diversity (± sd)", "context complexity", "layout score",
                 "layout realism (± s.e.)"):
         t.add_column(col, justify="right" if col != "dataset" else "left")
     fmt = lambda v, p: "n/a" if v is None else f"{v:.{p}f}"  # noqa: E731
@@ -74,7 +76,10 @@ def metrics(
         realism = fmt(row["layout_realism"], 1)
         if row["layout_realism_se"] is not None:
             realism += f" ± {row['layout_realism_se']:.1f}"
-        t.add_row(shown(name, markup=True), str(row["scenes"]), str(row["instances"]), fmt(row["geometry_diversity"], 3),
+        geometry = fmt(row["geometry_diversity"], 3)
+        if row["geometry_diversity_sd"] is not None:
+            geometry += f" ± {row['geometry_diversity_sd']:.3f}"
+        t.add_row(shown(name, markup=True), str(row["scenes"]), str(row["instances"]), geometry,
                   fmt(row["context_complexity"], 3), fmt(row["layout_score"], 1), realism)
     Console().print(t)
     for name, row in table.items():

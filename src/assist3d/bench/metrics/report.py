@@ -30,6 +30,7 @@ from .realism import (RealismReference, RealismStats, realism_score, realism_spe
 log = logging.getLogger(__name__)
 
 POOL_PER_DATASET = 4000
+CODEBOOK_DRAWS = 8  # codebooks behind geometry_diversity_sd (draw 0 gives the value)
 
 
 @dataclass
@@ -156,12 +157,14 @@ def _load_layout(scene_dir: Path) -> SceneLayout | None:
         raise DataError(f"{p}: unreadable layout ({e})") from None
 
 
-def shared_codebook(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: int = 64) -> Codebook:
+def shared_codebook(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: int = 64, draw: int = 0) -> Codebook:
     """A codebook fitted on an equal-sized random pool from each dataset.
 
     Every dataset's pool is drawn from the same seeded stream and the pooled descriptors are put in
     one canonical order before the fit, so the codebook depends on which datasets are compared and
-    on ``seed``, never on the order they are listed in or on where they lie."""
+    on ``seed``, never on the order they are listed in or on where they lie. ``draw`` > 0 gives
+    another pool and fit from the same seed (:func:`codebook_draws`); draw 0 is the codebook."""
+    keys = () if draw == 0 else (int(draw),)
     pools = []
     n = min([len(s.features) for s in summaries if len(s.features)] or [0])
     n = min(n, POOL_PER_DATASET)
@@ -169,7 +172,7 @@ def shared_codebook(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: in
         if len(s.features) == 0:
             continue
         if len(s.features) > n:
-            pick = np.sort(make_rng(seed, "codebook-pool").choice(len(s.features), size=n, replace=False))
+            pick = np.sort(make_rng(seed, "codebook-pool", *keys).choice(len(s.features), size=n, replace=False))
         else:
             pick = np.arange(len(s.features))
         pools.append(s.features[pick])
@@ -177,15 +180,24 @@ def shared_codebook(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: in
         raise DataError("no instance with enough points in any dataset: cannot fit a shape codebook")
     pool = np.concatenate(pools)
     pool = pool[np.lexsort(pool.T[::-1])]  # rows sorted on the first column, then the second, ...
-    return fit_codebook(pool, k=k, rng=make_rng(seed, "codebook"))
+    return fit_codebook(pool, k=k, rng=make_rng(seed, "codebook", *keys))
+
+
+def codebook_draws(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: int = 64,
+                   draws: int = CODEBOOK_DRAWS) -> list[Codebook]:
+    """Draws 1 .. ``draws - 1`` of :func:`shared_codebook`: with draw 0 they give
+    ``geometry_diversity_sd``, how far a dataset's value moves with the codebook's pool and fit."""
+    return [shared_codebook(summaries, seed=seed, k=k, draw=d) for d in range(1, draws)]
 
 
 def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
-                  reference: RealismReference | None = None, seed: int = 0) -> dict:
+                  reference: RealismReference | None = None, seed: int = 0,
+                  other_codebooks: Sequence[Codebook] = ()) -> dict:
     """``{name: {"geometry_diversity", "context_complexity", "layout_score", "layout_realism", "scenes",
     "instances", ...}}`` keyed by each dataset as the user named it (``"dataset"`` holds its
     ``FORMAT:PATH`` form); a metric that cannot be computed is None, with the reason under
-    ``"notes"``. ``reference`` defaults to the shipped real-scan statistics; ``seed`` seeds the
+    ``"notes"``. ``other_codebooks`` (:func:`codebook_draws`) give ``geometry_diversity_sd``, the
+    standard deviation of the value over them and ``codebook``; without them it is None. ``reference`` defaults to the shipped real-scan statistics; ``seed`` seeds the
     scene resampling behind ``layout_realism_se`` (the same stream for every dataset)."""
     reference = reference if reference is not None else RealismReference.load()
     out = {}
@@ -200,8 +212,14 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
             if realism_se is None:
                 notes["layout_realism_se"] = why_se
         gd = geometry_diversity(s.features, codebook) if len(s.features) else None
+        gd_sd = None
         if gd is None:
             notes["geometry_diversity"] = "no instance with enough points"
+        elif other_codebooks:
+            values = [gd] + [geometry_diversity(s.features, book) for book in other_codebooks]
+            gd_sd = float(np.std(values, ddof=1))
+        else:
+            notes["geometry_diversity_sd"] = "one codebook only (a codebook file was given)"
         cc = context_complexity(s.scene_classes) if s.scene_classes else None
         if cc is None:
             notes["context_complexity"] = "no scenes"
@@ -214,6 +232,7 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
             comps = {k: round(float(np.mean([c[k] for c in s.layout_components])), 4) for k in s.layout_components[0]}
         row = {
             "geometry_diversity": None if gd is None else round(gd, 4),
+            "geometry_diversity_sd": None if gd_sd is None else round(gd_sd, 4),
             "context_complexity": None if cc is None else round(cc, 4),
             "layout_score": None if ls is None else round(ls, 2),
             "scenes": s.scenes,
