@@ -24,6 +24,13 @@ def _pose(x, y, z=0.0):
     return p
 
 
+def _box_and_tall(seed=0):
+    """A one-room layout: a box and a tall box on the floor."""
+    room = Room(((0, 0), (4, 0), (4, 3), (0, 3)), 2.6, ())
+    return SceneLayout(room, (PlacedInstance(1, "box", "box", "floor", _pose(1, 1)),
+                              PlacedInstance(2, "tall", "tall", "floor", _pose(3, 2))), (), seed=seed, seconds=0.0)
+
+
 def _write_dataset(root, catalog_dir, layouts):
     cat = Catalog.open_or_create(catalog_dir)
     for aid, size in (("box", (0.6, 0.4, 0.8)), ("tall", (0.3, 0.3, 1.6))):
@@ -87,10 +94,7 @@ def test_metrics_cli_json_keys_are_the_datasets_as_given(tmp_path, monkeypatch):
 
     from assist3d.cli import app
 
-    room = Room(((0, 0), (4, 0), (4, 3), (0, 3)), 2.6, ())
-    layouts = [SceneLayout(room, (PlacedInstance(1, "box", "box", "floor", _pose(1, 1)),
-                                  PlacedInstance(2, "tall", "tall", "floor", _pose(3, 2))), (), seed=0, seconds=0.0)]
-    _write_dataset(tmp_path / "ds", tmp_path / "lib", layouts)
+    _write_dataset(tmp_path / "ds", tmp_path / "lib", [_box_and_tall()])
     monkeypatch.chdir(tmp_path)
     res = CliRunner().invoke(app, ["metrics", "ds", "assist3d:ds", "--json"])
     assert res.exit_code == 0, res.output
@@ -121,11 +125,7 @@ def test_plot_labels_are_short_when_unambiguous():
 def test_descriptors_do_not_depend_on_where_the_dataset_lies_or_what_else_is_read(tmp_path):
     """The same scenes give the same shape descriptors (so the same geometry diversity) in a copy
     of the dataset at another path, and a scene read alone gives what it gives among the others."""
-    room = Room(((0, 0), (4, 0), (4, 3), (0, 3)), 2.6, ())
-    layouts = [SceneLayout(room, (PlacedInstance(1, "box", "box", "floor", _pose(1, 1)),
-                                  PlacedInstance(2, "tall", "tall", "floor", _pose(3, 2))), (), seed=k, seconds=0.0)
-               for k in range(2)]
-    _write_dataset(tmp_path / "ds", tmp_path / "lib", layouts)
+    _write_dataset(tmp_path / "ds", tmp_path / "lib", [_box_and_tall(k) for k in range(2)])
     shutil.copytree(tmp_path / "ds", tmp_path / "moved" / "copy")
     shutil.copytree(tmp_path / "ds", tmp_path / "second_only")
     shutil.rmtree(tmp_path / "second_only" / "scene_000000")
@@ -181,10 +181,7 @@ def test_metrics_cli_geometry_sd_null_with_a_given_codebook(tmp_path, monkeypatc
 
     from assist3d.cli import app
 
-    room = Room(((0, 0), (4, 0), (4, 3), (0, 3)), 2.6, ())
-    layouts = [SceneLayout(room, (PlacedInstance(1, "box", "box", "floor", _pose(1, 1)),
-                                  PlacedInstance(2, "tall", "tall", "floor", _pose(3, 2))), (), seed=0, seconds=0.0)]
-    _write_dataset(tmp_path / "ds", tmp_path / "lib", layouts)
+    _write_dataset(tmp_path / "ds", tmp_path / "lib", [_box_and_tall()])
     monkeypatch.chdir(tmp_path)
     fitted = CliRunner().invoke(app, ["metrics", "ds", "--json", "--save-codebook", "book.npz"])
     assert fitted.exit_code == 0, fitted.output
