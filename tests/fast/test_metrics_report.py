@@ -136,7 +136,8 @@ def test_descriptors_do_not_depend_on_where_the_dataset_lies_or_what_else_is_rea
     # the descriptors are random draws: another seed gives other ones
     assert not np.array_equal(a.features, summarize_dataset(str(tmp_path / "ds"), seed=1).features)
     table = metrics_table([a, b], shared_codebook([a, b], seed=0))
-    assert table[str(tmp_path / "ds")]["geometry_diversity"] == table[str(tmp_path / "moved/copy")]["geometry_diversity"]
+    here, moved = table[str(tmp_path / "ds")], table[str(tmp_path / "moved/copy")]
+    assert here["geometry_diversity"] == moved["geometry_diversity"]
 
 
 def test_shared_codebook_does_not_depend_on_the_order_datasets_are_listed_in():

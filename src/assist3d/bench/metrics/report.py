@@ -171,10 +171,8 @@ def shared_codebook(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: in
     for s in summaries:
         if len(s.features) == 0:
             continue
-        if len(s.features) > n:
-            pick = np.sort(make_rng(seed, "codebook-pool", *keys).choice(len(s.features), size=n, replace=False))
-        else:
-            pick = np.arange(len(s.features))
+        pick = make_rng(seed, "codebook-pool", *keys).choice(len(s.features), size=n, replace=False) \
+            if len(s.features) > n else np.arange(len(s.features))
         pools.append(s.features[pick])
     if not pools:
         raise DataError("no instance with enough points in any dataset: cannot fit a shape codebook")
@@ -197,8 +195,9 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
     "instances", ...}}`` keyed by each dataset as the user named it (``"dataset"`` holds its
     ``FORMAT:PATH`` form); a metric that cannot be computed is None, with the reason under
     ``"notes"``. ``other_codebooks`` (:func:`codebook_draws`) give ``geometry_diversity_sd``, the
-    standard deviation of the value over them and ``codebook``; without them it is None. ``reference`` defaults to the shipped real-scan statistics; ``seed`` seeds the
-    scene resampling behind ``layout_realism_se`` (the same stream for every dataset)."""
+    standard deviation of the value over them and ``codebook``; without them it is None.
+    ``reference`` defaults to the shipped real-scan statistics; ``seed`` seeds the scene
+    resampling behind ``layout_realism_se`` (the same stream for every dataset)."""
     reference = reference if reference is not None else RealismReference.load()
     out = {}
     for s in summaries:
@@ -219,7 +218,7 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
             values = [gd] + [geometry_diversity(s.features, book) for book in other_codebooks]
             gd_sd = float(np.std(values, ddof=1))
         else:
-            notes["geometry_diversity_sd"] = "one codebook only (a codebook file was given)"
+            notes["geometry_diversity_sd"] = "one codebook only (e.g. a codebook file was given)"
         cc = context_complexity(s.scene_classes) if s.scene_classes else None
         if cc is None:
             notes["context_complexity"] = "no scenes"
