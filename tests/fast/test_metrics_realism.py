@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from assist3d.core.errors import DataError
-from assist3d.bench.metrics.realism import (STATS, RealismReference, RealismStats, _ks_to_quantiles, realism_score,
-                                      scene_stats)
+from assist3d.bench.metrics.realism import (STATS, RealismReference, RealismStats, _ks_to_quantiles, realism_profile,
+                                      realism_score, scene_stats)
 
 
 def _box_points(centre, size, yaw_deg, z0, rng, n=3000):
@@ -73,6 +73,34 @@ def test_score_is_high_for_the_same_distribution_and_falls_with_a_different_one(
     # the reference survives its JSON form
     again = RealismReference.from_json(json.loads(json.dumps(ref.to_json())), "mem")
     assert realism_score(same, again)[0] == s_same
+
+
+def test_profile_says_which_way_a_dataset_differs_from_the_reference():
+    rng = np.random.default_rng(7)
+    full = [((1.0, 0.35), (1.6, 0.6, 0.8), 0.0, 0.0), ((3.5, 2.0), (1.2, 0.5, 0.4), 30.0, 0.0),
+            ((4.7, 3.0), (0.5, 0.1, 0.4), 0.0, 1.2), ((2.0, 3.4), (1.4, 0.8, 0.7), 0.0, 0.0)]
+    ref_stats, sparse = RealismStats(), RealismStats()
+    for _ in range(3):
+        ref_stats.add(scene_stats(*_room(full, rng)))
+        sparse.add(scene_stats(*_room([full[1], ((1.5, 2.0), (0.6, 0.6, 0.5), 0.0, 0.0)], rng)))  # bench, cube: mid-room
+    ref = RealismReference.from_stats(ref_stats, "toy")
+    same = realism_profile(ref_stats, ref)
+    assert set(same) == {"objects_per_scene", *STATS}
+    # against the reference it was built from, every median and the object count agree
+    assert same["objects_per_scene"] == {"dataset": 4.0, "reference": 4.0}
+    for k in STATS:
+        assert same[k]["dataset"] == pytest.approx(same[k]["reference"], abs=1e-3)
+    # a sparser dataset: fewer objects a scene, less floor covered, farther from the walls
+    prof = realism_profile(sparse, ref)
+    assert prof["objects_per_scene"] == {"dataset": 2.0, "reference": 4.0}
+    assert prof["coverage"]["dataset"] < prof["coverage"]["reference"]
+    assert prof["wall_distance"]["dataset"] > 0.9 > prof["wall_distance"]["reference"]
+    assert prof["misalignment"]["dataset"] == pytest.approx(30, abs=4)
+    # a reference without its scene count (an older JSON file) leaves that side null; no score: no profile
+    bare = RealismReference(ref.quantiles, "old.json", 0, ref.objects)
+    assert realism_profile(sparse, bare)["objects_per_scene"]["reference"] is None
+    assert realism_profile(scene_stats(*_room([], rng)), ref) is None
+    assert realism_profile(scene_stats(*_room(full[1:2], rng)), ref) is None  # one object: no neighbour
 
 
 def test_ks_against_quantiles_matches_the_two_sample_statistic():

@@ -111,6 +111,27 @@ def test_metrics_cli_json_keys_are_the_datasets_as_given(tmp_path, monkeypatch):
         # its standard error over scenes: null with the reason for a one-scene dataset
         assert row["layout_realism_se"] is None
         assert row["layout_realism"] is None or row["notes"]["layout_realism_se"] == "fewer than 2 scenes"
+        # which way it differs from the real scans: objects a scene and each statistic's median, both sides
+        prof = row["layout_realism_profile"]
+        assert (prof is None) == (row["layout_realism"] is None)
+        if prof is not None:
+            assert set(prof) == {"objects_per_scene", *row["layout_realism_components"]}
+            assert prof["objects_per_scene"]["reference"] > prof["objects_per_scene"]["dataset"] > 0
+
+
+def test_realism_hint_names_the_farthest_statistics_with_their_medians():
+    from assist3d.cli.metrics import realism_hint
+
+    row = {"layout_realism_components": {"wall_distance": 0.1, "misalignment": 0.3, "height": 0.5, "neighbour": 0.2,
+                                         "free_space": 0.1, "coverage": 0.66},
+           "layout_realism_profile": {"objects_per_scene": {"dataset": 12.84, "reference": 32.8},
+                                      "height": {"dataset": 0.12, "reference": 0.38},
+                                      "coverage": {"dataset": 0.13, "reference": 0.49}}}
+    hint = realism_hint(row)
+    assert hint.index("coverage (KS 0.66; median 0.13 against 0.49)") < hint.index("height (KS 0.50; median 0.12 m")
+    assert "misalignment" not in hint and hint.endswith("12.8 objects a scene against 32.8")
+    row["layout_realism_profile"]["objects_per_scene"]["reference"] = None
+    assert realism_hint(row).endswith("12.8 objects a scene")
 
 
 def test_plot_labels_are_short_when_unambiguous():

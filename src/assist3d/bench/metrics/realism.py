@@ -352,6 +352,25 @@ def realism_score(stats: RealismStats, reference: RealismReference) -> tuple[flo
     return round(100.0 * (1.0 - float(np.mean(list(ks.values())))), 2), ks, None
 
 
+def realism_profile(stats: RealismStats, reference: RealismReference) -> dict | None:
+    """Which way a dataset differs from the reference, in the statistics' own units:
+    ``{"objects_per_scene": {"dataset": mean, "reference": mean}, STAT: {"dataset": median, "reference":
+    median}, ...}`` for the six statistics (metres, degrees, shares). The score's KS distances say how far
+    each distribution is from the reference's; this says, for instance, that a dataset's rooms cover less
+    floor or hold fewer objects than real ones. None when the score cannot be computed; a reference read
+    from a JSON file without its scene count gives ``objects_per_scene`` a null reference side.
+    """
+    arrs = stats.arrays()
+    if stats.objects == 0 or stats.scenes == 0 or any(len(arrs[k]) == 0 for k in STATS):
+        return None
+    half = (QUANTILES - 1) // 2  # quantiles are at linspace(0, 1, QUANTILES): the middle one is the median
+    out = {"objects_per_scene": {"dataset": round(stats.objects / stats.scenes, 2),
+                                 "reference": round(reference.objects / reference.scenes, 2) if reference.scenes else None}}
+    for k in STATS:
+        out[k] = {"dataset": round(float(np.median(arrs[k])), 4), "reference": round(float(reference.quantiles[k][half]), 4)}
+    return out
+
+
 def realism_standard_error(stats: RealismStats, reference: RealismReference, rng: np.random.Generator,
                            draws: int = BOOTSTRAP_DRAWS) -> tuple[float | None, str | None]:
     """``(standard error of layout_realism, reason when None)``: the standard deviation of the score

@@ -24,8 +24,8 @@ from .context import context_complexity, per_class_max_cooccurrence
 from .diversity import Codebook, fit_codebook, geometry_diversity
 from .features import FEATURE_DIM, instance_descriptors
 from .plausibility import score_layout
-from .realism import (RealismReference, RealismStats, realism_score, realism_spec, realism_standard_error,
-                      scene_stats)
+from .realism import (RealismReference, RealismStats, realism_profile, realism_score, realism_spec,
+                      realism_standard_error, scene_stats)
 
 log = logging.getLogger(__name__)
 
@@ -196,6 +196,8 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
     ``FORMAT:PATH`` form); a metric that cannot be computed is None, with the reason under
     ``"notes"``. ``other_codebooks`` (:func:`codebook_draws`) give ``geometry_diversity_sd``, the
     standard deviation of the value over them and ``codebook``; without them it is None.
+    ``layout_realism_profile`` (:func:`~.realism.realism_profile`) gives objects a scene and each realism
+    statistic's median beside the reference's, so a reader sees which way a dataset differs.
     ``reference`` defaults to the shipped real-scan statistics; ``seed`` seeds the scene
     resampling behind ``layout_realism_se`` (the same stream for every dataset)."""
     reference = reference if reference is not None else RealismReference.load()
@@ -241,6 +243,7 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
             "layout_realism": realism,
             "layout_realism_se": realism_se,
             "layout_realism_components": realism_parts or None,
+            "layout_realism_profile": realism_profile(s.realism, reference) if realism is not None else None,
             "layout_realism_reference": reference.source,
             "codes": len(codebook.centers),
             "dataset": s.spec or s.name,
