@@ -82,7 +82,8 @@ def test_profile_says_which_way_a_dataset_differs_from_the_reference():
     ref_stats, sparse = RealismStats(), RealismStats()
     for _ in range(3):
         ref_stats.add(scene_stats(*_room(full, rng)))
-        sparse.add(scene_stats(*_room([full[1], ((1.5, 2.0), (0.6, 0.6, 0.5), 0.0, 0.0)], rng)))  # bench, cube: mid-room
+        # the bench and a cube, both mid-room
+        sparse.add(scene_stats(*_room([full[1], ((1.5, 2.0), (0.6, 0.6, 0.5), 0.0, 0.0)], rng)))
     ref = RealismReference.from_stats(ref_stats, "toy")
     same = realism_profile(ref_stats, ref)
     assert set(same) == {"objects_per_scene", *STATS}

@@ -120,7 +120,7 @@ def test_metrics_cli_json_keys_are_the_datasets_as_given(tmp_path, monkeypatch):
 
 
 def test_realism_hint_names_the_farthest_statistics_with_their_medians():
-    from assist3d.cli.metrics import realism_hint
+    from assist3d.bench.metrics.report import realism_hint
 
     row = {"layout_realism_components": {"wall_distance": 0.1, "misalignment": 0.3, "height": 0.5, "neighbour": 0.2,
                                          "free_space": 0.1, "coverage": 0.66},

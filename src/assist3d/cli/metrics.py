@@ -49,7 +49,8 @@ def metrics(
     """Geometry diversity, context complexity and layout reasonability of one or more datasets."""
     from ..bench.metrics.diversity import Codebook
     from ..bench.metrics.realism import load_reference
-    from ..bench.metrics.report import codebook_draws, metrics_table, plot_summaries, shared_codebook, summarize_dataset
+    from ..bench.metrics.report import (codebook_draws, metrics_table, plot_summaries, realism_hint, shared_codebook,
+                                        summarize_dataset)
 
     vlm_cfg = None
     if llm_base_url and llm_model:
@@ -87,22 +88,6 @@ def metrics(
             Console(stderr=True).print(f"[dim]{shown(name, markup=True)}: {realism_hint(row)}[/dim]")
         for k, why in (row.get("notes") or {}).items():
             Console(stderr=True).print(f"[dim]{shown(name, markup=True)}: {k} n/a: {shown(why, markup=True)}[/dim]")
-
-
-UNITS = {"wall_distance": " m", "misalignment": " deg", "height": " m", "neighbour": " m", "free_space": "",
-         "coverage": ""}
-
-
-def realism_hint(row: dict, most: int = 2) -> str:
-    """One line on where a dataset's arrangements differ most from the reference's: the ``most`` statistics
-    with the largest KS distance, each with the dataset's and the reference's medians, and objects a scene."""
-    parts, prof = row["layout_realism_components"], row["layout_realism_profile"]
-    worst = sorted(parts, key=lambda k: (-parts[k], k))[:most]
-    said = [f"{k} (KS {parts[k]:.2f}; median {prof[k]['dataset']:.2f}{UNITS[k]} against {prof[k]['reference']:.2f}"
-            f"{UNITS[k]})" for k in worst]
-    ops = prof["objects_per_scene"]
-    line = f"layout realism furthest from the reference on {' and '.join(said)}; {ops['dataset']:.1f} objects a scene"
-    return line + (f" against {ops['reference']:.1f}" if ops["reference"] is not None else "")
 
 
 def cluster_assets_cmd(

@@ -254,6 +254,22 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
     return out
 
 
+REALISM_UNITS = {"wall_distance": " m", "misalignment": " deg", "height": " m", "neighbour": " m", "free_space": "",
+                 "coverage": ""}
+
+
+def realism_hint(row: dict, most: int = 2) -> str:
+    """One line on where a dataset's arrangements differ most from the reference's: the ``most`` statistics
+    with the largest KS distance, each with the dataset's and the reference's medians, and objects a scene."""
+    parts, prof = row["layout_realism_components"], row["layout_realism_profile"]
+    worst = sorted(parts, key=lambda k: (-parts[k], k))[:most]
+    said = [f"{k} (KS {parts[k]:.2f}; median {prof[k]['dataset']:.2f}{REALISM_UNITS[k]} against "
+            f"{prof[k]['reference']:.2f}{REALISM_UNITS[k]})" for k in worst]
+    ops = prof["objects_per_scene"]
+    line = f"layout realism furthest from the reference on {' and '.join(said)}; {ops['dataset']:.1f} objects a scene"
+    return line + (f" against {ops['reference']:.1f}" if ops["reference"] is not None else "")
+
+
 def short_labels(names: Sequence[str]) -> list[str]:
     """Legend labels: each dataset's last path component when those are unique (the folders of one
     comparison), else the names as given."""
