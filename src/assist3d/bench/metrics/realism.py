@@ -364,10 +364,11 @@ def realism_profile(stats: RealismStats, reference: RealismReference) -> dict | 
     if stats.objects == 0 or stats.scenes == 0 or any(len(arrs[k]) == 0 for k in STATS):
         return None
     half = (QUANTILES - 1) // 2  # quantiles are at linspace(0, 1, QUANTILES): the middle one is the median
-    out = {"objects_per_scene": {"dataset": round(stats.objects / stats.scenes, 2),
-                                 "reference": round(reference.objects / reference.scenes, 2) if reference.scenes else None}}
+    ref_per_scene = round(reference.objects / reference.scenes, 2) if reference.scenes else None
+    out = {"objects_per_scene": {"dataset": round(stats.objects / stats.scenes, 2), "reference": ref_per_scene}}
     for k in STATS:
-        out[k] = {"dataset": round(float(np.median(arrs[k])), 4), "reference": round(float(reference.quantiles[k][half]), 4)}
+        out[k] = {"dataset": round(float(np.median(arrs[k])), 4),
+                  "reference": round(float(reference.quantiles[k][half]), 4)}
     return out
 
 
