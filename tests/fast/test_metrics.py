@@ -12,7 +12,7 @@ import trimesh
 from assist3d.assets.catalog import Catalog
 from assist3d.core.contracts import AssetRecord, MeshData, Opening, PlacedInstance, Room, SceneLayout, SupportSurface
 from assist3d.bench.metrics.context import context_complexity, per_class_max_cooccurrence
-from assist3d.bench.metrics.diversity import code_entropy, fit_codebook, geometry_diversity
+from assist3d.bench.metrics.diversity import code_entropy, fit_codebook, geometry_diversity, geometry_diversity_se
 from assist3d.bench.metrics.features import FEATURE_DIM, instance_descriptors, shape_descriptor
 from assist3d.bench.metrics.plausibility import score_layout
 
@@ -164,3 +164,27 @@ def test_asset_feature_cache_is_reused(catalog, monkeypatch):
     # another seed is a different cache: recomputed
     with pytest.raises(AssertionError, match="recomputed"):
         clusters.asset_features(catalog, seed=1)
+
+
+def test_geometry_diversity_se_tracks_the_spread_over_fresh_draws_of_scenes():
+    """The scene resampling's standard error is about the true spread of the value over fresh datasets
+    when a scene's objects share shapes; resampling instances instead would miss most of it."""
+    k = 16
+    shares = np.random.default_rng(0).dirichlet(np.full(k, 0.7))
+
+    def dataset(rng, scenes=40):  # each scene holds 10-29 objects of two of the codes
+        return [rng.choice(rng.choice(k, 2, p=shares, replace=False), rng.integers(10, 30)) for _ in range(scenes)]
+
+    rng = np.random.default_rng(1)
+    true = np.std([code_entropy(np.concatenate(dataset(rng)), k) for _ in range(300)], ddof=1)
+    ses = [geometry_diversity_se(dataset(rng), k, np.random.default_rng(i))[0] for i in range(12)]
+    assert 0.75 < np.mean(ses) / true < 1.3
+    flat = np.concatenate(dataset(rng))
+    per_instance = geometry_diversity_se([flat[i:i + 1] for i in range(len(flat))], k, np.random.default_rng(0))[0]
+    assert per_instance / true < 0.6
+    # reproducible, an empty scene is harmless, and one scene gives no standard error
+    d = dataset(np.random.default_rng(2), scenes=10)
+    assert geometry_diversity_se(d, k, np.random.default_rng(3)) == geometry_diversity_se(d, k, np.random.default_rng(3))
+    assert geometry_diversity_se(d + [np.zeros(0, np.int64)], k, np.random.default_rng(3))[0] > 0
+    assert geometry_diversity_se(d[:1], k, np.random.default_rng(3)) == (None, "fewer than 2 scenes")
+    assert geometry_diversity_se([np.zeros(0, np.int64)] * 3, k, np.random.default_rng(3))[0] is None

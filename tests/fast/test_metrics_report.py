@@ -196,6 +196,29 @@ def test_geometry_diversity_sd_is_the_spread_over_codebook_draws():
         assert table[s.name]["geometry_diversity"] == plain[s.name]["geometry_diversity"] == round(values[0], 4)
         assert table[s.name]["geometry_diversity_sd"] == round(float(np.std(values, ddof=1)), 4) > 0
         assert plain[s.name]["geometry_diversity_sd"] is None and plain[s.name]["notes"]["geometry_diversity_sd"]
+        # summaries made without per-scene counts cannot be resampled by scene: null with the reason
+        assert table[s.name]["geometry_diversity_se"] is None
+        assert table[s.name]["notes"]["geometry_diversity_se"] == "descriptors not attributed to scenes"
+
+
+def test_geometry_diversity_se_resamples_a_datasets_scenes(tmp_path):
+    """`geometry_diversity_se` of a read dataset: its scenes' codes under the value's codebook, resampled
+    by scene with the `--seed` stream; null with the reason for one scene."""
+    from assist3d.bench.metrics.diversity import geometry_diversity_se
+    from assist3d.core.rng import make_rng
+
+    _write_dataset(tmp_path / "ds", tmp_path / "lib", [_box_and_tall(k) for k in range(3)])
+    s = summarize_dataset(str(tmp_path / "ds"))
+    assert s.feature_counts == [2, 2, 2]
+    book = shared_codebook([s], seed=0, k=4)
+    row = metrics_table([s], book, seed=5)[str(tmp_path / "ds")]
+    codes = book.assign(s.features)
+    want, _ = geometry_diversity_se([codes[0:2], codes[2:4], codes[4:6]], len(book.centers),
+                                    make_rng(5, "geometry_diversity_se"))
+    assert row["geometry_diversity_se"] == round(want, 4) > 0
+    one = summarize_dataset(str(tmp_path / "ds"), max_scenes=1)
+    row1 = metrics_table([one], book)[str(tmp_path / "ds")]
+    assert row1["geometry_diversity_se"] is None and row1["notes"]["geometry_diversity_se"] == "fewer than 2 scenes"
 
 
 def test_metrics_cli_geometry_sd_null_with_a_given_codebook(tmp_path, monkeypatch):

@@ -15,6 +15,7 @@ from __future__ import annotations
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 from scipy.cluster.vq import kmeans2
@@ -24,6 +25,7 @@ from ...core.errors import DataError, shown
 from ...core.fileio import write_npz_atomic
 
 DEFAULT_CODES = 64
+SE_DRAWS = 500  # scene resamplings behind geometry_diversity_se
 
 
 @dataclass(frozen=True)
@@ -79,3 +81,28 @@ def code_entropy(codes: np.ndarray, k: int) -> float:
 
 def geometry_diversity(features: np.ndarray, codebook: Codebook) -> float:
     return code_entropy(codebook.assign(features), len(codebook.centers))
+
+
+def geometry_diversity_se(scene_codes: Sequence[np.ndarray], k: int, rng: np.random.Generator,
+                          draws: int = SE_DRAWS) -> tuple[float | None, str | None]:
+    """``(standard error of the code entropy, reason when None)``: the standard deviation of
+    :func:`code_entropy` over ``draws`` resamplings of the scenes with replacement, a scene's codes
+    (``scene_codes[i]``, ints in 0..k-1) going together, under the same codebook. It says how far the
+    value would move with other scenes from the same generator; the codebook's own spread is
+    ``geometry_diversity_sd``. None for fewer than 2 scenes, or when too few resamplings hold an instance.
+    """
+    n = len(scene_codes)
+    if n < 2:
+        return None, "fewer than 2 scenes"
+    hist = np.stack([np.bincount(np.asarray(c, np.int64), minlength=k) for c in scene_codes]).astype(np.float64)
+    picks = rng.integers(0, n, (draws, n))
+    times = np.stack([np.bincount(p, minlength=n) for p in picks]).astype(np.float64)  # (draws, scenes)
+    counts = times @ hist  # each resampling's code histogram
+    total = counts.sum(1)
+    ok = total > 0
+    if ok.sum() < draws // 2:
+        return None, "too few scenes with an instance"
+    p = counts[ok] / total[ok, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ent = -np.where(p > 0, p * np.log(p), 0.0).sum(1)
+    return float(np.std(ent, ddof=1)), None

@@ -21,7 +21,7 @@ from ...core.fileio import atomic_path
 from ...llm.vlm import vlm_layout_score
 from ...core.rng import make_rng
 from .context import context_complexity, per_class_max_cooccurrence
-from .diversity import Codebook, fit_codebook, geometry_diversity
+from .diversity import Codebook, fit_codebook, geometry_diversity, geometry_diversity_se
 from .features import FEATURE_DIM, instance_descriptors
 from .plausibility import score_layout
 from .realism import (RealismReference, RealismStats, realism_profile, realism_score, realism_spec,
@@ -42,6 +42,7 @@ class DatasetSummary:
     scenes: int = 0
     instances: int = 0
     features: np.ndarray = field(default_factory=lambda: np.zeros((0, FEATURE_DIM), np.float32))
+    feature_counts: list = field(default_factory=list)  # descriptors per scene, in the order of ``features``
     scene_classes: list = field(default_factory=list)
     layout_scores: list = field(default_factory=list)
     layout_components: list = field(default_factory=list)
@@ -109,6 +110,7 @@ def summarize_dataset(spec: str, *, assets: str | None = None, max_scenes: int |
         # scenes give the same descriptors wherever the dataset lies and whichever others are read
         inst_ids, f = instance_descriptors(sample.coord, sample.instance, rng=make_rng(seed, "metrics", str(sid)))
         feats.append(f)
+        summary.feature_counts.append(len(f))
         counted = sample if realism_ds is None else realism_ds.load(sid)
         summary.realism.add(scene_stats(counted.coord, counted.instance, f"{spec} scene {sid}"))
         layout = _load_layout(Path(ds.root) / sid) if fmt == "assist3d" else None
@@ -188,6 +190,15 @@ def codebook_draws(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: int
     return [shared_codebook(summaries, seed=seed, k=k, draw=d) for d in range(1, draws)]
 
 
+def _geometry_se(summary: DatasetSummary, codebook: Codebook, seed: int) -> tuple[float | None, str | None]:
+    """``geometry_diversity_se`` of one dataset under ``codebook`` (its scenes resampled, seeded by ``seed``)."""
+    if sum(summary.feature_counts) != len(summary.features):
+        return None, "descriptors not attributed to scenes"
+    codes = codebook.assign(summary.features)
+    per_scene = np.split(codes, np.cumsum(summary.feature_counts)[:-1])
+    return geometry_diversity_se(per_scene, len(codebook.centers), make_rng(seed, "geometry_diversity_se"))
+
+
 def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
                   reference: RealismReference | None = None, seed: int = 0,
                   other_codebooks: Sequence[Codebook] = ()) -> dict:
@@ -199,7 +210,8 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
     ``layout_realism_profile`` (:func:`~.realism.realism_profile`) gives objects a scene and each realism
     statistic's median beside the reference's, so a reader sees which way a dataset differs.
     ``reference`` defaults to the shipped real-scan statistics; ``seed`` seeds the scene
-    resampling behind ``layout_realism_se`` (the same stream for every dataset)."""
+    resamplings behind ``layout_realism_se`` and ``geometry_diversity_se`` (one stream each, the same
+    for every dataset)."""
     reference = reference if reference is not None else RealismReference.load()
     out = {}
     for s in summaries:
@@ -213,14 +225,18 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
             if realism_se is None:
                 notes["layout_realism_se"] = why_se
         gd = geometry_diversity(s.features, codebook) if len(s.features) else None
-        gd_sd = None
+        gd_sd = gd_se = None
         if gd is None:
             notes["geometry_diversity"] = "no instance with enough points"
-        elif other_codebooks:
-            values = [gd] + [geometry_diversity(s.features, book) for book in other_codebooks]
-            gd_sd = float(np.std(values, ddof=1))
         else:
-            notes["geometry_diversity_sd"] = "one codebook only (e.g. a codebook file was given)"
+            if other_codebooks:
+                values = [gd] + [geometry_diversity(s.features, book) for book in other_codebooks]
+                gd_sd = float(np.std(values, ddof=1))
+            else:
+                notes["geometry_diversity_sd"] = "one codebook only (e.g. a codebook file was given)"
+            gd_se, why_se = _geometry_se(s, codebook, seed)
+            if gd_se is None:
+                notes["geometry_diversity_se"] = why_se
         cc = context_complexity(s.scene_classes) if s.scene_classes else None
         if cc is None:
             notes["context_complexity"] = "no scenes"
@@ -234,6 +250,7 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
         row = {
             "geometry_diversity": None if gd is None else round(gd, 4),
             "geometry_diversity_sd": None if gd_sd is None else round(gd_sd, 4),
+            "geometry_diversity_se": None if gd_se is None else round(gd_se, 4),
             "context_complexity": None if cc is None else round(cc, 4),
             "layout_score": None if ls is None else round(ls, 2),
             "scenes": s.scenes,
