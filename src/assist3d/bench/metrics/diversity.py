@@ -94,15 +94,15 @@ def geometry_diversity_se(scene_codes: Sequence[np.ndarray], k: int, rng: np.ran
     n = len(scene_codes)
     if n < 2:
         return None, "fewer than 2 scenes"
-    hist = np.stack([np.bincount(np.asarray(c, np.int64), minlength=k) for c in scene_codes]).astype(np.float64)
-    picks = rng.integers(0, n, (draws, n))
-    times = np.stack([np.bincount(p, minlength=n) for p in picks]).astype(np.float64)  # (draws, scenes)
-    counts = times @ hist  # each resampling's code histogram
-    total = counts.sum(1)
-    ok = total > 0
-    if ok.sum() < draws // 2:
+    codes = np.concatenate([np.asarray(c, np.int64) for c in scene_codes])
+    scene_of = np.repeat(np.arange(n), [len(c) for c in scene_codes])
+    ent = []
+    for _ in range(draws):  # one resampling at a time: memory stays that of the codes, whatever the scene count
+        times = np.bincount(rng.integers(0, n, n), minlength=n)  # how often each scene was drawn
+        counts = np.bincount(codes, weights=times[scene_of], minlength=k)
+        if counts.sum() > 0:
+            p = counts[counts > 0] / counts.sum()
+            ent.append(float(-(p * np.log(p)).sum()))
+    if len(ent) < draws // 2:
         return None, "too few scenes with an instance"
-    p = counts[ok] / total[ok, None]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ent = -np.where(p > 0, p * np.log(p), 0.0).sum(1)
     return float(np.std(ent, ddof=1)), None
