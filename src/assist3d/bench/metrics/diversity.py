@@ -70,13 +70,17 @@ def fit_codebook(features: np.ndarray, *, k: int = DEFAULT_CODES, rng: np.random
     return Codebook(centers.astype(np.float32), mean.astype(np.float32), scale.astype(np.float32))
 
 
+def _histogram_entropy(counts: np.ndarray) -> float:
+    """Shannon entropy (nats) of a histogram of non-negative counts with a positive sum."""
+    p = counts[counts > 0] / counts.sum()
+    return float(-(p * np.log(p)).sum())
+
+
 def code_entropy(codes: np.ndarray, k: int) -> float:
     """Shannon entropy (nats) of the histogram of ``codes`` over ``k`` bins; NaN if empty."""
     if len(codes) == 0:
         return float("nan")
-    p = np.bincount(codes, minlength=k).astype(np.float64)
-    p = p[p > 0] / p.sum()
-    return float(-(p * np.log(p)).sum())
+    return _histogram_entropy(np.bincount(codes, minlength=k).astype(np.float64))
 
 
 def geometry_diversity(features: np.ndarray, codebook: Codebook) -> float:
@@ -101,8 +105,7 @@ def geometry_diversity_se(scene_codes: Sequence[np.ndarray], k: int, rng: np.ran
         times = np.bincount(rng.integers(0, n, n), minlength=n)  # how often each scene was drawn
         counts = np.bincount(codes, weights=times[scene_of], minlength=k)
         if counts.sum() > 0:
-            p = counts[counts > 0] / counts.sum()
-            ent.append(float(-(p * np.log(p)).sum()))
+            ent.append(_histogram_entropy(counts))
     if len(ent) < draws // 2:
         return None, "too few scenes with an instance"
     return float(np.std(ent, ddof=1)), None

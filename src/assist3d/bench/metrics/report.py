@@ -21,7 +21,7 @@ from ...core.fileio import atomic_path
 from ...llm.vlm import vlm_layout_score
 from ...core.rng import make_rng
 from .context import context_complexity, per_class_max_cooccurrence
-from .diversity import Codebook, fit_codebook, geometry_diversity, geometry_diversity_se
+from .diversity import Codebook, code_entropy, fit_codebook, geometry_diversity, geometry_diversity_se
 from .features import FEATURE_DIM, instance_descriptors
 from .plausibility import score_layout
 from .realism import (RealismReference, RealismStats, realism_profile, realism_score, realism_spec,
@@ -190,13 +190,13 @@ def codebook_draws(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: int
     return [shared_codebook(summaries, seed=seed, k=k, draw=d) for d in range(1, draws)]
 
 
-def _geometry_se(summary: DatasetSummary, codebook: Codebook, seed: int) -> tuple[float | None, str | None]:
-    """``geometry_diversity_se`` of one dataset under ``codebook`` (its scenes resampled, seeded by ``seed``)."""
-    if sum(summary.feature_counts) != len(summary.features):
+def _geometry_se(summary: DatasetSummary, codes: np.ndarray, k: int, seed: int) -> tuple[float | None, str | None]:
+    """``geometry_diversity_se`` of one dataset from its descriptors' ``codes`` under a ``k``-code codebook
+    (its scenes resampled, seeded by ``seed``)."""
+    if sum(summary.feature_counts) != len(codes):
         return None, "descriptors not attributed to scenes"
-    codes = codebook.assign(summary.features)
     per_scene = np.split(codes, np.cumsum(summary.feature_counts)[:-1])
-    return geometry_diversity_se(per_scene, len(codebook.centers), make_rng(seed, "geometry_diversity_se"))
+    return geometry_diversity_se(per_scene, k, make_rng(seed, "geometry_diversity_se"))
 
 
 def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
@@ -224,7 +224,8 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
             realism_se, why_se = realism_standard_error(s.realism, reference, make_rng(seed, "layout_realism_se"))
             if realism_se is None:
                 notes["layout_realism_se"] = why_se
-        gd = geometry_diversity(s.features, codebook) if len(s.features) else None
+        codes = codebook.assign(s.features) if len(s.features) else None  # coded once: the value and its se
+        gd = code_entropy(codes, len(codebook.centers)) if codes is not None else None
         gd_sd = gd_se = None
         if gd is None:
             notes["geometry_diversity"] = "no instance with enough points"
@@ -234,7 +235,7 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
                 gd_sd = float(np.std(values, ddof=1))
             else:
                 notes["geometry_diversity_sd"] = "one codebook only (e.g. a codebook file was given)"
-            gd_se, why_se = _geometry_se(s, codebook, seed)
+            gd_se, why_se = _geometry_se(s, codes, len(codebook.centers), seed)
             if gd_se is None:
                 notes["geometry_diversity_se"] = why_se
         cc = context_complexity(s.scene_classes) if s.scene_classes else None
@@ -260,7 +261,7 @@ def metrics_table(summaries: Sequence[DatasetSummary], codebook: Codebook,
             "layout_realism": realism,
             "layout_realism_se": realism_se,
             "layout_realism_components": realism_parts or None,
-            "layout_realism_profile": realism_profile(s.realism, reference) if realism is not None else None,
+            "layout_realism_profile": realism_profile(s.realism, reference),  # None wherever the score is
             "layout_realism_reference": reference.source,
             "codes": len(codebook.centers),
             "dataset": s.spec or s.name,
