@@ -136,3 +136,94 @@ def test_the_kernel_choice_belongs_to_each_model():
         with pytest.raises(Exception, match="spconv"):
             sp.use_backend(b, "spconv")
         assert b[0].backend == "torch"  # a refused switch changes nothing
+
+
+def _layers_with_grads(make, x_feats, run, compute_dtype):
+    """Output and gradients (input, weight) of a freshly made layer run with ``compute_dtype``."""
+    torch.manual_seed(0)
+    layer = make()
+    for m in layer.modules():
+        if hasattr(m, "compute_dtype"):
+            m.compute_dtype = compute_dtype
+    f = x_feats.detach().clone().requires_grad_(True)
+    out = run(layer, f)
+    g = torch.linspace(-1, 1, out.numel(), dtype=out.dtype).view_as(out)
+    (out * g).sum().backward()
+    return out.detach(), f.grad, layer.weight.grad
+
+
+@pytest.fixture
+def small_blocks(monkeypatch):
+    """im2col blocks of 64 rows, buckets 16 / 64: several blocks and a padded last one in tiny tests."""
+    monkeypatch.setattr(sp, "IM2COL_ROWS", 64)
+    monkeypatch.setattr(sp, "_ROW_BUCKETS", (16, 64))
+
+
+@pytest.mark.parametrize("k", [1, 3, 5])
+def test_im2col_convolutions_equal_the_per_offset_path(k, small_blocks):
+    """The im2col path (the bfloat16 training path's arithmetic, run here in float32 and float64)
+    gives the per-offset path's outputs and gradients for every operator, over several padded blocks."""
+    gen = torch.Generator().manual_seed(10 + k)
+    coords = _random_sites(gen, 2, 9, 300)
+    for dt, close in ((torch.float32, _close),
+                      (torch.float64, lambda a, b: torch.testing.assert_close(a, b, rtol=1e-10, atol=1e-10))):
+        feats = torch.randn(300, 4, generator=gen, dtype=dt)
+        x = sp.sparse_tensor(coords, feats)
+        coarse = sp.DownConv3d(4, 4).to(dt)(x)
+        cases = [
+            (lambda: sp.SubMConv3d(4, 5, kernel_size=k).to(dt), feats, lambda m, f: m(x.replace(f)).feats),
+            (lambda: sp.DownConv3d(4, 6).to(dt), feats, lambda m, f: m(x.replace(f)).feats),
+            (lambda: sp.UpConv3d(4, 3).to(dt), coarse.feats, lambda m, f: m(coarse.replace(f), x).feats),
+        ]
+        for make, inp, run in cases:
+            ref = _layers_with_grads(make, inp, run, None)
+            got = _layers_with_grads(make, inp, run, dt)
+            for a, b in zip(got, ref):
+                close(a, b)
+
+
+def test_bfloat16_precision_stays_close_and_float32_at_the_boundary():
+    gen = torch.Generator().manual_seed(3)
+    coords = _random_sites(gen, 1, 16, 900)
+    feats = torch.randn(900, 16, generator=gen)
+    make = lambda: sp.SubMConv3d(16, 16, 3)  # noqa: E731
+    run = lambda m, f: m(sp.sparse_tensor(coords, f)).feats  # noqa: E731
+    ref = _layers_with_grads(make, feats, run, None)
+    got = _layers_with_grads(make, feats, run, torch.bfloat16)
+    for a, b in zip(got, ref):
+        assert a.dtype == torch.float32
+        assert float((a - b).norm() / b.norm()) < 2e-2  # bfloat16 inputs: ~3 significant digits
+    # use_precision reaches every sparse convolution and only them
+    net = torch.nn.Sequential(sp.SubMConv3d(2, 2, 3), sp.DownConv3d(2, 2), sp.SparseLinear(2, 2))
+    sp.use_precision(net, "bfloat16")
+    assert net[0].compute_dtype == net[1].compute_dtype == torch.bfloat16
+    assert not hasattr(net[2], "compute_dtype")
+    sp.use_precision(net, "float32")
+    assert net[0].compute_dtype is None
+    with pytest.raises(ValueError, match="precision"):
+        sp.use_precision(net, "float16")
+
+
+def test_neighbour_table_dense_grid_equals_sorted_search(monkeypatch):
+    gen = torch.Generator().manual_seed(5)
+    coords = _random_sites(gen, 3, 10, 500)
+    coords[:, 1:] -= 4  # negative coordinates too
+    cset = sp.CoordSet.build(coords)
+    dense = sp._neighbour_table(coords, 3, cset)
+    monkeypatch.setattr(sp, "DENSE_GRID_CELLS", 0)
+    searched = sp._neighbour_table(coords, 3, cset)
+    assert torch.equal(dense, searched)
+    # the centre offset is the site itself; a neighbour in another scene is never returned
+    assert torch.equal(dense[:, 13], torch.arange(500))
+    hit = dense < 500
+    rows = torch.arange(500)[:, None].expand_as(dense)
+    assert torch.equal(coords[dense[hit], 0], coords[rows[hit], 0])
+
+
+def test_auto_precision_follows_the_cpu(monkeypatch):
+    assert sp.resolve_precision("float32") == "float32"
+    assert sp.resolve_precision("auto", "cpu") == ("bfloat16" if sp.native_bfloat16() else "float32")
+    monkeypatch.setattr(sp, "native_bfloat16", lambda device="cpu": False)
+    assert sp.resolve_precision("auto") == "float32"
+    with pytest.raises(ValueError):
+        sp.resolve_precision("fp8")

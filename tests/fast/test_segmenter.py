@@ -893,3 +893,35 @@ def test_the_documented_segmenter_config_is_the_defaults_and_names_every_key():
     assert parse_segmenter_config(data) == SegmenterConfig()
     defaults = SegmenterConfig().model_dump()
     assert {k: set(v) for k, v in data.items()} == {k: set(v) for k, v in defaults.items()}
+
+
+@pytest.mark.skipif(not __import__("assist3d.learn.models.sparse", fromlist=["x"]).native_bfloat16(),
+                    reason="this CPU has no native bfloat16 matmul")
+def test_bfloat16_training_learns_and_its_model_runs_in_float32(tiny_scenes, tmp_path, one_thread):
+    """optim.precision bfloat16 (the fast path): the same steps as float32 to within bfloat16's
+    rounding, recorded in the checkpoint; the model it writes loads and predicts on the float32 path."""
+    runs = {}
+    for precision in ("float32", "bfloat16"):
+        cfg = parse_segmenter_config({**TINY_NET, "optim": {**TINY_NET["optim"], "precision": precision}})
+        train_segmenter(cfg, tiny_scenes, tmp_path / precision, seed=1, budget=Budget(steps=6))
+        runs[precision] = load_segmenter(tmp_path / precision / "last.pt")
+    fast, ref = runs["bfloat16"], runs["float32"]
+    assert fast.progress["precision"] == "bfloat16" and ref.progress["precision"] == "float32"
+    assert all(getattr(m, "compute_dtype", None) is None for m in fast.model.modules())  # inference: float32
+    losses = {p: [float(r.split(",")[3]) for r in (tmp_path / p / "train_log.csv").read_text().splitlines()[1:]]
+              for p in runs}
+    assert np.allclose(losses["bfloat16"], losses["float32"], rtol=0.05)
+    assert losses["bfloat16"][-1] < losses["bfloat16"][0]
+    vox = voxelize(tiny_scenes[0].coord, 0.1)
+    fg_fast, _ = predict_voxels(fast.model, vox.coords, voxel_features(vox, use_color=False))
+    fg_ref, _ = predict_voxels(ref.model, vox.coords, voxel_features(vox, use_color=False))
+    assert np.isfinite(fg_fast).all()
+    assert np.abs(fg_fast - fg_ref).mean() < 0.05  # six steps apart only by rounding
+
+
+def test_a_config_from_before_precision_trains_in_float32():
+    """Checkpoints and probe folders written before optim.precision existed trained in float32."""
+    from assist3d.learn.segmenter.config import legacy_config
+    old = {**TINY_NET, "optim": {k: v for k, v in TINY_NET["optim"].items()}}
+    assert parse_segmenter_config(legacy_config(old)).optim.precision == "float32"
+    assert parse_segmenter_config(TINY_NET).optim.precision == "auto"

@@ -33,6 +33,67 @@ def _require_torch() -> None:
 def register(app: typer.Typer) -> None:
     app.command("probe")(probe_cmd)
     app.command("segment")(segment_cmd)
+    app.command("bench-train")(bench_train_cmd)
+
+
+def _segmenter_config(config: Optional[Path]) -> dict:
+    """The mapping of a ``--config`` YAML file ({} without one); one clear line when it is not one."""
+    if config is None:
+        return {}
+    if not config.is_file():
+        raise ConfigError(f"--config {config}: file not found")
+    try:
+        data = yaml.safe_load(config.read_text()) or {}
+    except yaml.YAMLError as e:
+        raise ConfigError(f"--config {config}: not valid YAML ({e})") from None
+    if not isinstance(data, dict):
+        raise ConfigError(f"--config {config}: expected a mapping at the top level")
+    return data
+
+
+def bench_train_cmd(
+    data: list[str] = typer.Option(..., "--data", help="training scenes FORMAT:PATH (repeatable), e.g. "
+                                   "assist3d:demo_out"),
+    steps: int = typer.Option(10, "--steps", min=1, max=10_000, help="timed training steps"),
+    warmup: int = typer.Option(3, "--warmup", min=0, max=10_000, help="untimed steps first"),
+    precision: str = typer.Option("", "--precision", help="override optim.precision: auto, float32 or bfloat16"),
+    config: Optional[Path] = typer.Option(None, "--config", "-c", help="segmenter config YAML (net, augment, optim)"),
+    max_train_scenes: int = typer.Option(0, "--max-train-scenes", min=0, help="use the first N scenes of each set"),
+    threads: int = typer.Option(0, "--threads", min=0, max=256, help="torch CPU threads (0 = all cores)"),
+    device: str = typer.Option("cpu", "--device", help="cpu, cuda or auto"),
+    loader_workers: int = typer.Option(0, "--loader-workers", min=0, max=64,
+                                       help="processes that build examples ahead of each step"),
+    as_json: bool = typer.Option(False, "--json", help="print the figures as JSON"),
+) -> None:
+    """Time the segmenter's training loop (examples, forward, backward, optimiser): seconds per step,
+    steps/s and examples/s, on this machine."""
+    _require_torch()
+    import torch
+
+    from ..learn.engine.train import resolve_device
+    from ..learn.segmenter.bench import bench_training
+    from ..learn.segmenter.config import parse_segmenter_config
+    from ..learn.segmenter.probe import load_training_scenes
+
+    cfg_data = _segmenter_config(config)
+    if precision:
+        cfg_data = {**cfg_data, "optim": {**(cfg_data.get("optim") or {}), "precision": precision}}
+    cfg = parse_segmenter_config(cfg_data, str(config or "--precision"))
+    if threads:
+        torch.set_num_threads(threads)
+    scenes = load_training_scenes(data, max_train_scenes)
+    result = bench_training(scenes, cfg, steps=steps, warmup=warmup, device=resolve_device(device),
+                            loader_workers=loader_workers)
+    if as_json:
+        typer.echo(json.dumps(result.as_dict(), indent=1))
+        return
+    table = Table(title=f"bench-train: {', '.join(data)}")
+    for col in ("device", "precision", "threads", "s/step (median, min-max)", "steps/s", "examples/s"):
+        table.add_column(col, justify="right")
+    table.add_row(result.device, result.precision, str(result.threads),
+                  f"{result.step_s_median:.3f} ({result.step_s_min:.3f}-{result.step_s_max:.3f})",
+                  f"{result.steps_per_s:.3f}", f"{result.examples_per_s:.3f}")
+    Console().print(table)
 
 
 def _fmt(x: float | None) -> str:
@@ -77,16 +138,7 @@ def probe_cmd(
     die_with_parent()  # a seed process of --jobs: stops with the probe that started it
     if minutes is None and steps is None:
         minutes = 50.0
-    cfg_data: dict = {}
-    if config is not None:
-        if not config.is_file():
-            raise ConfigError(f"--config {config}: file not found")
-        try:
-            cfg_data = yaml.safe_load(config.read_text()) or {}
-        except yaml.YAMLError as e:
-            raise ConfigError(f"--config {config}: not valid YAML ({e})") from None
-        if not isinstance(cfg_data, dict):
-            raise ConfigError(f"--config {config}: expected a mapping at the top level")
+    cfg_data = _segmenter_config(config)
     req = ProbeRequest(train=tuple(train), eval=tuple(eval_), budget=Budget(steps=steps, minutes=minutes),
                        seeds=seeds, config=parse_segmenter_config(cfg_data, str(config or "defaults")),
                        max_train_scenes=max_train_scenes)

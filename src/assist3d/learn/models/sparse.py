@@ -54,6 +54,46 @@ def use_backend(module: nn.Module, name: str) -> nn.Module:
     return module
 
 
+#: Precisions the sparse convolutions can compute in (:func:`use_precision`).
+PRECISIONS = ("float32", "bfloat16")
+
+
+def use_precision(module: nn.Module, name: str) -> nn.Module:
+    """Compute every sparse convolution inside ``module`` in ``name``: ``float32`` (the per-offset
+    gather-matmul-scatter, the default of every new layer) or ``bfloat16`` (im2col blocks with
+    bfloat16 inputs and float32 accumulation; inputs, outputs and gradients stay float32, and every
+    other layer is untouched). A per-model setting, like :func:`use_backend`. Returns ``module``."""
+    if name not in PRECISIONS:
+        raise ValueError(f"unknown precision {name!r}; expected one of {', '.join(PRECISIONS)}")
+    dtype = None if name == "float32" else torch.bfloat16
+    for m in module.modules():
+        if isinstance(m, (SubMConv3d, DownConv3d, UpConv3d)):
+            m.compute_dtype = dtype
+    return module
+
+
+def native_bfloat16(device: str | torch.device = "cpu") -> bool:
+    """Whether ``device`` multiplies bfloat16 matrices in hardware: a CPU with AMX or AVX-512 BF16
+    (as PyTorch's oneDNN sees it). CUDA devices answer False here: the im2col path is measured on
+    CPUs only."""
+    if torch.device(device).type != "cpu":
+        return False
+    check = getattr(torch.ops.mkldnn, "_is_mkldnn_bf16_supported", None)
+    try:
+        return bool(check()) if check is not None else False
+    except RuntimeError:
+        return False
+
+
+def resolve_precision(name: str, device: str | torch.device = "cpu") -> str:
+    """``auto`` -> ``bfloat16`` where :func:`native_bfloat16`, else ``float32``; others unchanged."""
+    if name == "auto":
+        return "bfloat16" if native_bfloat16(device) else "float32"
+    if name not in PRECISIONS:
+        raise ValueError(f"unknown precision {name!r}; expected auto or one of {', '.join(PRECISIONS)}")
+    return name
+
+
 def encode_keys(coords: torch.Tensor) -> torch.Tensor:
     """Pack ``(N, 4)`` integer coordinates (batch, x, y, z) into ``(N,) int64`` keys.
 
@@ -124,6 +164,30 @@ class CoordSet:
             self.cache[key] = maps
         return self.cache[key]
 
+    def neighbour_table(self, kernel_size: int) -> torch.Tensor:
+        """``(N, k**3) int64``: row of each site's neighbour at every kernel offset (the order of
+        :func:`kernel_offsets`), ``N`` where there is none (the zero row the im2col path appends).
+
+        Built by one lookup per site and offset in a dense index grid per scene when the scenes'
+        bounding boxes are small enough (:data:`DENSE_GRID_CELLS`), else by the sorted-key search."""
+        key = ("table", kernel_size)
+        if key not in self.cache:
+            self.cache[key] = _neighbour_table(self.coords, kernel_size, self)
+        return self.cache[key]
+
+    def children(self) -> tuple[torch.Tensor, torch.Tensor]:
+        """For the coarser set of :meth:`down`: ``(M, 8) int64`` row of each coarse site's child in each
+        octant (``N`` where absent) and ``(N,) int64`` ``parent * 8 + octant`` of every row."""
+        key = ("children",)
+        if key not in self.cache:
+            coarse, inverse, octant = self.down()
+            n = len(self)
+            table = torch.full((len(coarse) * 8,), n, dtype=torch.int64, device=self.coords.device)
+            pick = inverse * 8 + octant
+            table[pick] = torch.arange(n, device=self.coords.device)
+            self.cache[key] = (table.view(-1, 8), pick)
+        return self.cache[key]
+
     def scene_sizes(self) -> list[int] | None:
         """Rows per scene (batch index ``coords[:, 0]``) when each scene's rows are contiguous and in batch
         order, as in every set the package builds (the batch index is the top of the sort key); else None."""
@@ -152,6 +216,35 @@ class CoordSet:
                               order=torch.arange(ukeys.shape[0], device=c.device))
             self.cache[key] = (coarse, inverse, octant)
         return self.cache[key]
+
+
+#: The largest dense index grid (cells, all scenes together) a neighbour table is built in; past it
+#: the table comes from the sorted-key search (same result, more time).
+DENSE_GRID_CELLS = 32_000_000  # 128 MB of int32
+
+
+def _neighbour_table(coords: torch.Tensor, kernel_size: int, cset: "CoordSet") -> torch.Tensor:
+    n = coords.shape[0]
+    offs = kernel_offsets(kernel_size, coords.device)
+    c = coords.to(torch.int64)
+    if n == 0:
+        return torch.zeros((0, len(offs)), dtype=torch.int64, device=coords.device)
+    r = kernel_size // 2
+    lo = c[:, 1:].amin(0) - r
+    ext = c[:, 1:].amax(0) + r + 1 - lo
+    nb = int(c[:, 0].max()) + 1
+    cells = nb * int(ext.prod())
+    if cells <= DENSE_GRID_CELLS:
+        # a dense grid of row indices (n = empty), padded by the kernel radius: every query is in range
+        strides = torch.stack([ext[1] * ext[2], ext[2], torch.ones_like(ext[2])])
+        grid = torch.full((cells,), n, dtype=torch.int32, device=coords.device)
+        flat = c[:, 0] * int(ext.prod()) + ((c[:, 1:] - lo) * strides).sum(1)
+        grid[flat] = torch.arange(n, dtype=torch.int32, device=coords.device)
+        return grid[flat[:, None] + (offs * strides).sum(1)[None, :]].to(torch.int64)
+    q = c[:, None, :].repeat(1, len(offs), 1)
+    q[:, :, 1:] += offs[None]
+    idx = cset.lookup(q.reshape(-1, 4)).view(n, len(offs))
+    return torch.where(idx < 0, torch.full_like(idx, n), idx)
 
 
 @dataclass
@@ -188,6 +281,7 @@ class SubMConv3d(nn.Module):
             raise ValueError(f"SubMConv3d needs an odd kernel size, got {kernel_size}")
         self.kernel_size = kernel_size
         self.backend = "torch"  # see use_backend
+        self.compute_dtype: torch.dtype | None = None  # see use_precision
         self.weight = nn.Parameter(torch.empty(kernel_size ** 3, in_channels, out_channels))
         _init_weight(self.weight, in_channels * kernel_size ** 3)
         self.bias = nn.Parameter(torch.zeros(out_channels)) if bias else None
@@ -197,6 +291,11 @@ class SubMConv3d(nn.Module):
         w = self.weight.to(feats.dtype)
         if self.backend == "spconv":
             out = spconv_backend.subm_conv(x.coords, feats, w, self.kernel_size)
+            if self.bias is not None:
+                out = out + self.bias.to(out.dtype)
+            return x.replace(out)
+        if self.compute_dtype is not None:
+            out = _SubMConvIm2colFn.apply(feats, w, x.cset.neighbour_table(self.kernel_size), self.compute_dtype)
             if self.bias is not None:
                 out = out + self.bias.to(out.dtype)
             return x.replace(out)
@@ -260,6 +359,166 @@ class _SubMConvFn(torch.autograd.Function):
         return grad_feats, grad_w, None
 
 
+#: Rows of one im2col block: the gathered ``(rows, k**3 * C)`` matrix stays a few MB.
+IM2COL_ROWS = 4096
+#: Row counts a reduced-precision matmul is padded to. oneDNN builds a kernel for every new matrix
+#: shape (several ms each), and scenes give every layer a new row count each step: padding rows to
+#: one of a few sizes lets each layer reuse the same few kernels for the whole run.
+_ROW_BUCKETS = (256, 1024, IM2COL_ROWS)
+
+
+def _bucket(n: int) -> int:
+    """The padded row count of a block of ``n <= IM2COL_ROWS`` rows."""
+    for b in _ROW_BUCKETS:
+        if n <= b:
+            return b
+    return IM2COL_ROWS
+
+
+def _blocks(n: int):
+    """``(start, rows, padded rows)`` of each block of ``n`` rows."""
+    for r in range(0, n, IM2COL_ROWS):
+        m = min(IM2COL_ROWS, n - r)
+        yield r, m, _bucket(m)
+
+
+def _with_zero_row(t: torch.Tensor) -> torch.Tensor:
+    return torch.cat([t, t.new_zeros(1, t.shape[1])])
+
+
+def _pad_rows(t: torch.Tensor, rows: int, fill: int | float = 0) -> torch.Tensor:
+    if t.shape[0] == rows:
+        return t
+    return torch.cat([t, t.new_full((rows - t.shape[0], *t.shape[1:]), fill)])
+
+
+def gather_mm(src: torch.Tensor, table: torch.Tensor, w: torch.Tensor) -> torch.Tensor:
+    """``out[i] = concat_j(src[table[i, j]]) @ w`` for a ``(n, k)`` index ``table`` into ``src`` (whose
+    last row is zeros: the index of "no neighbour"), ``w`` of shape ``(k * C, C_out)``; block by block
+    so the gathered matrix stays small, every block padded to a bucketed row count."""
+    n, k = table.shape
+    c = src.shape[1]
+    out = src.new_empty((n, w.shape[1]))
+    zero = src.shape[0] - 1
+    for r, m, rows in _blocks(n):
+        idx = _pad_rows(table[r:r + m], rows, zero).reshape(-1)
+        out[r:r + m] = (src.index_select(0, idx).view(rows, k * c) @ w)[:m]
+    return out
+
+
+def gather_tmm(src: torch.Tensor, table: torch.Tensor, g: torch.Tensor) -> torch.Tensor:
+    """``concat_j(src[table[:, j]]).T @ g`` as float32 ``(k * C, C_g)``: the weight gradient of
+    :func:`gather_mm` for the output gradient ``g`` ``(n, C_g)``."""
+    n, k = table.shape
+    c = src.shape[1]
+    acc = torch.zeros((k * c, g.shape[1]), dtype=torch.promote_types(src.dtype, torch.float32), device=src.device)
+    zero = src.shape[0] - 1
+    for r, m, rows in _blocks(n):
+        idx = _pad_rows(table[r:r + m], rows, zero).reshape(-1)
+        cols = src.index_select(0, idx).view(rows, k * c)
+        acc += (cols.T @ _pad_rows(g[r:r + m], rows)).to(acc.dtype)
+    return acc
+
+
+def rows_mm(a: torch.Tensor, w: torch.Tensor) -> torch.Tensor:
+    """``a @ w`` block by block with bucketed row counts (see :data:`_ROW_BUCKETS`)."""
+    n = a.shape[0]
+    out = a.new_empty((n, w.shape[1]))
+    for r, m, rows in _blocks(n):
+        out[r:r + m] = (_pad_rows(a[r:r + m], rows) @ w)[:m]
+    return out
+
+
+class _SubMConvIm2colFn(torch.autograd.Function):
+    """The submanifold convolution as im2col (:func:`gather_mm` over the neighbour table): one large
+    matmul per block of sites instead of one small matmul and one scatter per kernel offset. The input
+    gradient is the same operation on the output gradient with the kernel mirrored (the neighbour of
+    ``j`` at offset ``-o`` is the site whose neighbour at ``o`` is ``j``), so neither direction scatters.
+
+    Computes in ``dtype`` with float32 accumulation and returns features in the input's dtype. It does
+    up to ``k**3 / mean neighbours`` times the multiply-adds of the per-offset path, which pays where
+    the large matmul runs on matrix units (bf16 on AMX or AVX-512) and the per-offset path is bound by
+    its gathers and scatters.
+    """
+
+    @staticmethod
+    def forward(ctx, feats: torch.Tensor, weight: torch.Tensor, table: torch.Tensor,  # type: ignore[override]
+                dtype: torch.dtype) -> torch.Tensor:
+        k3, cin, cout = weight.shape
+        f, w = feats.to(dtype), weight.to(dtype)
+        ctx.save_for_backward(f, w, table)
+        ctx.in_dtypes = (feats.dtype, weight.dtype)
+        return gather_mm(_with_zero_row(f), table, w.reshape(k3 * cin, cout)).to(feats.dtype)
+
+    @staticmethod
+    def backward(ctx, grad_out: torch.Tensor):  # type: ignore[override]
+        f, w, table = ctx.saved_tensors
+        k3, cin, cout = w.shape
+        g = grad_out.to(f.dtype)
+        grad_f = grad_w = None
+        if ctx.needs_input_grad[0]:
+            mirrored = w.flip(0).transpose(1, 2).reshape(k3 * cout, cin)
+            grad_f = gather_mm(_with_zero_row(g), table, mirrored).to(ctx.in_dtypes[0])
+        if ctx.needs_input_grad[1]:
+            grad_w = gather_tmm(_with_zero_row(f), table, g).view(k3, cin, cout).to(ctx.in_dtypes[1])
+        return grad_f, grad_w, None, None
+
+
+class _DownConvIm2colFn(torch.autograd.Function):
+    """Kernel-2 stride-2 convolution as im2col over each coarse site's 8 children (``children``
+    ``(M, 8)``, row ``N`` where a child is absent; ``pick`` ``(N,)`` = parent * 8 + octant of every
+    fine row). Weight ``(8, C_in, C_out)``."""
+
+    @staticmethod
+    def forward(ctx, feats, weight, children, pick, dtype):  # type: ignore[override]
+        _, cin, cout = weight.shape
+        f, w = feats.to(dtype), weight.to(dtype)
+        ctx.save_for_backward(f, w, children, pick)
+        ctx.in_dtypes = (feats.dtype, weight.dtype)
+        return gather_mm(_with_zero_row(f), children, w.reshape(8 * cin, cout)).to(feats.dtype)
+
+    @staticmethod
+    def backward(ctx, grad_out):  # type: ignore[override]
+        f, w, children, pick = ctx.saved_tensors
+        _, cin, cout = w.shape
+        g = grad_out.to(f.dtype)
+        grad_f = grad_w = None
+        if ctx.needs_input_grad[0]:
+            per_child = rows_mm(g, w.reshape(8 * cin, cout).T.contiguous())  # (M, 8 * C_in)
+            grad_f = per_child.view(-1, cin).index_select(0, pick).to(ctx.in_dtypes[0])
+        if ctx.needs_input_grad[1]:
+            grad_w = gather_tmm(_with_zero_row(f), children, g).view(8, cin, cout).to(ctx.in_dtypes[1])
+        return grad_f, grad_w, None, None, None
+
+
+class _UpConvIm2colFn(torch.autograd.Function):
+    """Transposed kernel-2 stride-2 convolution onto the fine sites: every coarse site's 8 possible
+    children at once (one matmul with the weight as ``(C_in, 8 * C_out)``), then each fine site reads
+    its own (``pick``); the transpose of :class:`_DownConvIm2colFn`."""
+
+    @staticmethod
+    def forward(ctx, feats, weight, children, pick, dtype):  # type: ignore[override]
+        _, cin, cout = weight.shape
+        f, w = feats.to(dtype), weight.to(dtype)
+        ctx.save_for_backward(f, w, children, pick)
+        ctx.in_dtypes = (feats.dtype, weight.dtype)
+        every = rows_mm(f, w.permute(1, 0, 2).reshape(cin, 8 * cout))  # (M, 8 * C_out)
+        return every.view(-1, cout).index_select(0, pick).to(feats.dtype)
+
+    @staticmethod
+    def backward(ctx, grad_out):  # type: ignore[override]
+        f, w, children, pick = ctx.saved_tensors
+        _, cin, cout = w.shape
+        g = _with_zero_row(grad_out.to(f.dtype))
+        grad_f = grad_w = None
+        if ctx.needs_input_grad[0]:
+            grad_f = gather_mm(g, children, w.transpose(1, 2).reshape(8 * cout, cin)).to(ctx.in_dtypes[0])
+        if ctx.needs_input_grad[1]:
+            gw = gather_tmm(g, children, f)  # (8 * C_out, C_in)
+            grad_w = gw.view(8, cout, cin).transpose(1, 2).contiguous().to(ctx.in_dtypes[1])
+        return grad_f, grad_w, None, None, None
+
+
 class DownConv3d(nn.Module):
     """Kernel 2, stride 2 convolution; output sites ``unique(coord // 2)``. Equals ``F.conv3d(stride=2)``."""
 
@@ -267,10 +526,17 @@ class DownConv3d(nn.Module):
         super().__init__()
         self.weight = nn.Parameter(torch.empty(8, in_channels, out_channels))
         _init_weight(self.weight, in_channels * 8)
+        self.compute_dtype: torch.dtype | None = None  # see use_precision
         self.bias = nn.Parameter(torch.zeros(out_channels)) if bias else None
 
     def forward(self, x: SparseTensor) -> SparseTensor:
         coarse, inverse, octant = x.cset.down()
+        if self.compute_dtype is not None:
+            children, pick = x.cset.children()
+            out = _DownConvIm2colFn.apply(x.feats, self.weight, children, pick, self.compute_dtype)
+            if self.bias is not None:
+                out = out + self.bias.to(out.dtype)
+            return SparseTensor(feats=out, cset=coarse, stride=x.stride * 2)
         w = self.weight.to(x.feats.dtype)
         # One batched matmul over the 8 octants: (N, C_in) x (C_in, C_out) per row's octant, grouped.
         rows = [torch.nonzero(octant == o).squeeze(1) for o in range(8)]
@@ -293,12 +559,19 @@ class UpConv3d(nn.Module):
         self.backend = "torch"  # see use_backend
         self.weight = nn.Parameter(torch.empty(8, in_channels, out_channels))
         _init_weight(self.weight, in_channels)
+        self.compute_dtype: torch.dtype | None = None  # see use_precision
         self.bias = nn.Parameter(torch.zeros(out_channels)) if bias else None
 
     def forward(self, x: SparseTensor, target: SparseTensor) -> SparseTensor:
         coarse, inverse, octant = target.cset.down()
         if x.cset is not coarse:
             raise ValueError("UpConv3d: the input is not the stride-2 parent of the target coordinates")
+        if self.compute_dtype is not None:
+            children, pick = target.cset.children()
+            out = _UpConvIm2colFn.apply(x.feats, self.weight, children, pick, self.compute_dtype)
+            if self.bias is not None:
+                out = out + self.bias.to(out.dtype)
+            return SparseTensor(feats=out, cset=target.cset, stride=target.stride)
         w = self.weight.to(x.feats.dtype)
         if self.backend == "spconv":
             sites, feats = spconv_backend.up_conv(x.coords, x.feats, w)

@@ -71,6 +71,10 @@ class OptimConfig(Section):
     ema_decay: float = Field(0.99, ge=0.0, lt=1.0, description="exponential moving average of the weights, kept "
                              "beside the trained ones and used as the final model (0 = off; default since "
                              "2026-11-27 by the probe, docs/fidelity.md 'Weight averaging')")
+    precision: Literal["auto", "float32", "bfloat16"] = Field(
+        "auto", description="arithmetic of the sparse convolutions in training: float32, or bfloat16 inputs "
+        "with float32 accumulation (im2col blocks; several times faster where the CPU multiplies bfloat16 "
+        "natively, AMX or AVX-512 BF16); auto = bfloat16 on such a CPU, else float32. Inference is float32")
 
 
 class SegmenterConfig(Section):
@@ -83,7 +87,8 @@ class SegmenterConfig(Section):
 # Keys added with a default other than the behaviour before them: (section, key) -> that behaviour.
 # A key missing from a stored configuration otherwise takes today's default (pydantic), which is
 # right for every key whose default reproduces what came before it.
-BEFORE_ADDED: dict[tuple[str, str], Any] = {("optim", "ema_decay"): 0.0}  # no weight averaging
+BEFORE_ADDED: dict[tuple[str, str], Any] = {("optim", "ema_decay"): 0.0,  # no weight averaging
+                                           ("optim", "precision"): "float32"}
 
 
 def legacy_config(data: Any) -> Any:

@@ -125,9 +125,10 @@ def floor_height(centres: np.ndarray, percentile: float = 2.0) -> float:
 
 def neighbourhood_scatter(centres: np.ndarray, k: int, tree: cKDTree | None = None) -> np.ndarray:
     """(V, 3, 3) scatter matrix (sum of outer products, centred) of each row's ``k`` nearest rows of
-    ``centres`` (V, 3); its smallest-eigenvalue eigenvector is the PCA normal."""
+    ``centres`` (V, 3); its smallest-eigenvalue eigenvector is the PCA normal. The neighbour search
+    runs on every core (the same neighbours as on one)."""
     k = min(k, len(centres))
-    _, idx = (tree or cKDTree(centres)).query(centres, k=k)
+    _, idx = (tree or cKDTree(centres)).query(centres, k=k, workers=-1)
     nb = centres[idx.reshape(len(centres), k)]  # (V, k, 3)
     nb = nb - nb.mean(1, keepdims=True)
     return np.einsum("vki,vkj->vij", nb, nb)

@@ -22,6 +22,7 @@ import torch
 import torch.nn.functional as F
 
 from ..engine.loggers import CsvLog, TrainLogger, close_all, log_all
+from ..models.sparse import resolve_precision, use_precision
 from ...core.errors import ConfigError
 from .checkpoint import load_segmenter, save_segmenter
 from .config import SegmenterConfig
@@ -127,6 +128,8 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
     last = out / "last.pt"
     torch.manual_seed(seed)
     model = Segmenter(cfg.net).to(device)
+    precision = resolve_precision(cfg.optim.precision, device)
+    use_precision(model, precision)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.optim.lr, weight_decay=cfg.optim.weight_decay)
     ema = copy.deepcopy(model).requires_grad_(False) if cfg.optim.ema_decay > 0 else None
     step, seconds, last_loss = 0, 0.0, float("nan")
@@ -152,7 +155,8 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
     pending: list[dict] = []
 
     def save() -> None:
-        progress = {"step": step, "train_seconds": seconds, "loss": last_loss, "seed": seed, "budget": budget.as_dict()}
+        progress = {"step": step, "train_seconds": seconds, "loss": last_loss, "seed": seed, "budget": budget.as_dict(),
+                    "precision": precision}
         save_segmenter(last, model, cfg, meta={**meta, **progress}, optimizer=opt, progress=progress, ema=ema)
         log_all(sinks, pending)  # rows reach the logs only with the checkpoint that covers them
         pending.clear()
