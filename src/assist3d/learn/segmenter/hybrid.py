@@ -66,7 +66,7 @@ NMS_IOU = 0.5
 
 #: The geometric settings of hybrid inference: the reference's, with each RANSAC plane refit twice to
 #: its inliers, which keeps the components steadier when a scan moves by a millimetre (measured and
-#: adopted by the rule of docs/results/noise-2026-11-28/plan-refine.md; docs/fidelity.md, "Noisy
+#: adopted by the rule of experiments/noise-2026-11-28/plan-refine.md; docs/fidelity.md, "Noisy
 #: scans"). The reference row itself (``segment --method geometric``) keeps ``GeometricConfig()``.
 HYBRID_GEOMETRIC = GeometricConfig(refine=2)
 
