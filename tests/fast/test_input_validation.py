@@ -249,18 +249,20 @@ def test_evaluate_warns_on_scenes_whose_labels_are_all_void(tmp_path):
 
 
 def test_segment_raw_inputs_refuse_non_numbers_and_clean_colours(tmp_path):
-    from assist3d.cli.segment import _scan_from_file, usable_points
+    from assist3d.bench.data.scanfile import read_scan
+    from assist3d.learn.segmenter.predictor import usable_points
 
     path = tmp_path / "scan.npy"
     np.save(path, np.zeros((4, 3), np.complex128))
     with pytest.raises(DataError, match=r"scan\.npy: expected a numeric"):
-        _scan_from_file(path)
+        read_scan(path)
     a = np.zeros((4, 6))
     a[:, :3] = np.arange(12).reshape(4, 3)
     a[0, 0], a[1, 1], a[2, 3] = np.nan, 1e30, np.nan
     np.save(path, a)
     with warnings_of("assist3d") as msgs:
-        sid, coord, color, sample = _scan_from_file(path)
+        scan = read_scan(path)
+        sid, coord, color, sample = scan.scene_id, scan.coord, scan.color, scan.sample
         ok = usable_points(str(path), sid, coord)
     assert sid == "scan" and sample is None and color.dtype == np.uint8 and color[2, 0] == 0
     assert ok.tolist() == [False, False, True, True]
@@ -272,7 +274,7 @@ def test_segment_raw_inputs_refuse_non_numbers_and_clean_colours(tmp_path):
 def test_segment_coordinate_limit_is_taken_in_the_scans_units():
     """The ±1e5 m limit on coordinates holds in metres whatever --units says: a point 150 m out is
     kept in a millimetre scan (1.5e5 mm) and dropped when the same numbers are read as metres."""
-    from assist3d.cli.segment import usable_points
+    from assist3d.learn.segmenter.predictor import usable_points
 
     coord = np.array([[0.0, 0.0, 0.0], [1.5e5, 0.0, 0.0], [2.0e8, 0.0, 0.0]], np.float32)
     assert usable_points("scan", "s", coord, "mm").tolist() == [True, True, False]

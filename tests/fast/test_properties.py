@@ -93,11 +93,13 @@ def test_array_reader_gives_a_valid_sample_or_its_own_error(scratch, a):
 @SETTINGS
 @given(a=scan_arrays())
 def test_segment_point_reader_gives_usable_points_or_its_own_error(scratch, a):
-    from assist3d.cli.segment import _scan_from_file, usable_points
+    from assist3d.bench.data.scanfile import read_scan
+    from assist3d.learn.segmenter.predictor import usable_points
 
     path = _save(scratch, "probe_scan_b.npy", a)
     try:
-        scene_id, coord, color, sample = _scan_from_file(path)
+        scan = read_scan(path)
+        scene_id, coord, color, sample = scan.scene_id, scan.coord, scan.color, scan.sample
         usable = usable_points(str(path), scene_id, coord)
     except AssistError as e:
         event(f"refused: {type(e).__name__}")

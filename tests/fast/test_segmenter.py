@@ -757,7 +757,7 @@ def test_segment_reads_y_up_and_millimetre_scans_with_the_frame_flags(tmp_path):
 
 
 def test_frame_hint_flags_scans_on_their_side_or_in_centimetres_only():
-    from assist3d.cli.segment import frame_hint
+    from assist3d.learn.segmenter.predictor import frame_hint
 
     rng = np.random.default_rng(0)
     room = rng.uniform([0, 0, 0], [6.0, 4.0, 2.7], (5000, 3))
@@ -925,3 +925,38 @@ def test_a_config_from_before_precision_trains_in_float32():
     old = {**TINY_NET, "optim": {k: v for k, v in TINY_NET["optim"].items()}}
     assert parse_segmenter_config(legacy_config(old)).optim.precision == "float32"
     assert parse_segmenter_config(TINY_NET).optim.precision == "auto"
+
+
+def test_predictor_segments_a_scan_from_python_and_takes_a_registered_step(tmp_path):
+    """The library call behind `assist3d segment`: masks over every input point (non-finite points in
+    none), a post-processing step plugged in by name, and segment_scan's files and rows."""
+    from assist3d.learn.segmenter.infer import Segmentation
+    from assist3d.learn.segmenter.predictor import STEPS, Predictor, Step, segment_scan
+
+    s = make_toy_scene("toy", rng=np.random.default_rng(3), num_objects=4, room_m=4.0, density_per_m2=800.0)
+    coord = s.coord.copy()
+    coord[5] = np.nan
+    seg = Predictor.load(method="geometric").segment(coord, s.color, name="toy")
+    assert seg.masks.shape == (len(seg.scores), len(coord)) and len(seg.scores) > 0
+    assert not seg.masks[:, 5].any() and seg.labels[5] == -1 and not seg.segmented[5]
+    assert len(seg.frame) == len(coord) - 1
+
+    def halves(model, cfg, frame, color, *, tta=False):
+        right = frame[:, 0] > np.median(frame[:, 0])
+        masks = np.stack([right, ~right])
+        return Segmentation(masks=masks, scores=np.array([0.9, 0.8], np.float32), labels=np.where(right, 0, 1))
+
+    STEPS.add("halves", Step(halves, needs_model=False))
+    try:
+        seg = Predictor.load(method="halves").segment(coord, name="toy")
+        assert seg.masks.sum() == len(coord) - 1 and seg.scores.tolist() == pytest.approx([0.9, 0.8])
+        np.save(tmp_path / "toy.npy", np.concatenate([s.coord, s.color], 1).astype(np.float32))
+        rows = list(segment_scan(str(tmp_path / "toy.npy"), tmp_path / "out", Predictor.load(method="halves"), png=True))
+        assert [r["instances"] for r in rows] == [2] and rows[0]["scene"] == "toy"
+        assert {p.name for p in (tmp_path / "out").iterdir()} == {"toy.npz", "toy.ply", "toy.png"}
+    finally:
+        STEPS.remove("halves")
+    with pytest.raises(ConfigError, match="did you mean 'hybrid'"):
+        Predictor.load(method="hybird")
+    with pytest.raises(DataError, match="no weights"):
+        Predictor.load(tmp_path / "x.pt", method="geometric")

@@ -4,10 +4,8 @@ any scan with the shipped model, a trained checkpoint or the geometric reference
 from __future__ import annotations
 
 import importlib.util
-import io
 import json
 import logging
-import time
 from pathlib import Path
 from typing import Optional
 
@@ -18,9 +16,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from ..core.errors import ConfigError, DataError, shown
-from ..core.fileio import write_bytes_atomic
-from ..core.paths import safe_name
+from ..core.errors import ConfigError, shown
 
 log = logging.getLogger("assist3d.segment")
 
@@ -207,121 +203,6 @@ def probe_cmd(
 
 # ----------------------------------------------------------------------------------------------- segment
 
-def _scan_from_file(path: Path) -> tuple[str, np.ndarray, np.ndarray | None, object | None]:
-    """(scene_id, coord (N, 3) float32, color (N, 3) uint8 or None, PointSample with GT or None) from
-    .ply / .npy, N > 0. Raw points (a .ply, an (N, 3|6) .npy) may hold non-finite coordinates:
-    :func:`usable_points` picks the ones to segment. An (N, 8) .npy is read by the ``array``
-    reader and follows its rules."""
-    from ..bench.data.base import REAL_KINDS, clean_colors, read_npy
-    from ..bench.data.ply import read_ply
-
-    if not path.is_file():
-        raise DataError(f"{path}: input not found" + (" (it is a folder: give FORMAT:PATH)" if path.is_dir() else ""))
-    suffix = path.suffix.lower()
-    if suffix == ".ply":
-        mesh = read_ply(path)
-        coord, color = mesh.xyz(), mesh.rgb()
-    elif suffix == ".npy":
-        a = read_npy(path)
-        if a.ndim != 2 or a.shape[1] not in (3, 6, 8) or a.dtype.kind not in REAL_KINDS:
-            raise DataError(f"{path}: expected a numeric (N, 3), (N, 6) or (N, 8) array (xyz[, rgb[, semantic, instance]]), "
-                            f"got {a.dtype} {a.shape}")
-        if a.shape[1] == 8 and len(a):
-            from ..bench.data.array import ArrayDataset
-
-            s = ArrayDataset(path).load(path.stem)
-            return path.stem, s.coord, s.color, s
-        with np.errstate(over="ignore", invalid="ignore"):
-            coord = np.ascontiguousarray(a[:, :3], np.float32)
-        color = clean_colors(path, a[:, 3:6]) if a.shape[1] >= 6 else None
-    else:
-        raise DataError(f"{path}: unsupported input {suffix or '(no suffix)'}; give a .ply, an (N, 3|6|8) .npy or FORMAT:PATH")
-    if len(coord) == 0:
-        raise DataError(f"{path}: scene {shown(path.stem)} has no points")
-    return path.stem, coord, color, None
-
-
-def usable_points(where: str, scene_id: str, coord: np.ndarray, units: str = "m") -> np.ndarray:
-    """(N,) bool: the points to segment, those with finite coordinates within ``MAX_COORD_M`` metres
-    (``coord`` is in ``units``, so the limit is taken in those units); the others get no instance,
-    with one warning giving their count. DataError when none is left."""
-    from ..bench.data.base import MAX_COORD_M
-    from ..learn.segmenter.features import UNITS
-
-    limit = MAX_COORD_M / UNITS[units]
-    with np.errstate(invalid="ignore"):
-        ok = np.all(np.isfinite(coord) & (np.abs(coord) <= limit), axis=1)
-    if not ok.all():
-        log.warning("%s: %d of %d points have non-finite coordinates or lie beyond ±%.0e m; they get no instance",
-                    shown(scene_id), int((~ok).sum()), len(coord), MAX_COORD_M)
-        if not ok.any():
-            raise DataError(f"{where}: scene {shown(scene_id)}: no point has finite coordinates "
-                            f"within ±{MAX_COORD_M:.0e} m")
-    return ok
-
-
-def frame_hint(frame: np.ndarray) -> str | None:
-    """Why a scan, already in the segmenter's frame, may not be metres with z up, or None. Robust
-    extents (1st-99th percentile): an indoor scan taller along z than 3.5 m and than its shorter
-    horizontal side is more likely lying on its side (a y-up export); one wider than 200 m is more
-    likely in centimetres. A hint for a warning, never an error: atriums and halls exist."""
-    if len(frame) < 100:
-        return None
-    lo, hi = np.percentile(frame, [1.0, 99.0], axis=0)
-    ext = hi - lo
-    if ext.max() > 200.0:
-        return (f"it spans {ext.max():.0f} m along an axis, more than an indoor scan; "
-                f"if it is not in metres, give --units cm or --units mm")
-    if ext[2] > 3.5 and ext[2] > min(ext[0], ext[1]):
-        return (f"it is {ext[2]:.1f} m tall along z but {min(ext[0], ext[1]):.1f} m wide along "
-                f"{'xy'[int(np.argmin(ext[:2]))]}; if z is not its up axis, give --up-axis (e.g. y)")
-    return None
-
-
-def _inputs(spec: str):
-    """Yield (scene_id, coord, color, sample-with-GT-or-None) for a file or a reader spec."""
-    from ..bench.data import READERS, open_dataset
-
-    if spec.split(":", 1)[0].strip().lower() not in READERS or Path(spec).exists():
-        yield _scan_from_file(Path(spec))
-        return
-
-    ds = open_dataset(spec)
-    for sid in ds.scene_ids:
-        s = ds.load(sid)
-        yield sid, s.coord, s.color, s
-
-
-def instance_colors(labels: np.ndarray) -> np.ndarray:
-    """A distinct colour per instance, grey for points in none."""
-    rng = np.random.default_rng(7)
-    k = int(labels.max()) + 1 if len(labels) and labels.max() >= 0 else 0
-    pal = (rng.uniform(0.15, 1.0, (max(k, 1), 3)) * 255).astype(np.uint8)
-    out = np.full((len(labels), 3), 150, np.uint8)
-    sel = labels >= 0
-    out[sel] = pal[labels[sel]]
-    return out
-
-
-def _png(path: Path, coord: np.ndarray, colors: np.ndarray, title: str) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    order = np.argsort(coord[:, 2])
-    fig, ax = plt.subplots(figsize=(7, 7), dpi=110)
-    ax.scatter(coord[order, 0], coord[order, 1], c=colors[order] / 255.0, s=1.0, linewidths=0)
-    ax.set_aspect("equal")
-    ax.set_title(title)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", bbox_inches="tight")
-    plt.close(fig)
-    write_bytes_atomic(path, buf.getvalue())
-
-
 def segment_cmd(
     input_: str = typer.Argument(..., metavar="INPUT", help="a .ply (mesh or point cloud), an (N, 3|6|8) .npy, or FORMAT:PATH"),
     out: Path = typer.Option(..., "--out", "-o", help="output folder: <scene_id>.npz (masks, scores) and <scene_id>.ply"),
@@ -342,9 +223,7 @@ def segment_cmd(
     units: str = typer.Option("m", "--units", help="the scan's length unit: m, cm or mm"),
 ) -> None:
     """Segment object instances in a scan (class-agnostic), with no GPU and no download."""
-    from ..bench.evaluation.ap import match_scene, summarize
-    from ..bench.evaluation.predictions import save_predictions
-    from ..bench.data.ply import write_ply
+    from ..learn.segmenter.features import UNITS, UP_AXES
 
     if method not in ("hybrid", "learned", "geometric"):
         raise ConfigError(f"--method {method!r}: expected 'hybrid', 'learned' or 'geometric'")
@@ -354,75 +233,22 @@ def segment_cmd(
         raise ConfigError("--tta is for --method hybrid or learned; the geometric reference has no network to average")
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out {out}: exists and is not a folder")
-    from ..learn.engine.voxelize import VoxelGridError
-    from ..learn.segmenter.features import UNITS, UP_AXES, to_segmenter_frame
-
     if up_axis not in UP_AXES:
         raise ConfigError(f"--up-axis {up_axis!r}: expected one of {', '.join(UP_AXES)}")
     if units not in UNITS:
         raise ConfigError(f"--units {units!r}: expected one of {', '.join(UNITS)}")
-    loaded = None
-    if method != "geometric":
-        _require_torch()
-        import torch
+    _require_torch()
+    import torch
 
-        from ..learn.segmenter.checkpoint import load_segmenters
-        from ..learn.segmenter.shipped import shipped_model_path
+    from ..learn.segmenter.predictor import Predictor, segment_scan
 
-        if threads:
-            torch.set_num_threads(threads)
-        loaded = load_segmenters(list(checkpoint or [shipped_model_path()]))
-    n_done = 0
-    for scene_id, coord, color, sample in _inputs(input_):
-        t0 = time.perf_counter()
-        safe_name(scene_id, what=f"{input_}: scene id")
-        coord = np.asarray(coord, np.float32)
-        if len(coord) == 0:
-            raise DataError(f"{input_}: scene {shown(scene_id)} has no points")
-        finite = usable_points(input_, scene_id, coord, units)
-        sub_color = color[finite] if color is not None else None
-        frame = to_segmenter_frame(coord[finite], up_axis, units)  # what the model sees: metres, z up
-        hint = frame_hint(frame)
-        if hint:
-            log.warning("%s: scene %s: %s", shown(input_), shown(scene_id), hint)
-        try:
-            if loaded is not None and method == "hybrid":
-                from ..learn.segmenter.hybrid import segment_hybrid
-
-                seg = segment_hybrid(loaded.model, loaded.config, frame, sub_color, tta=tta)
-            elif loaded is not None:
-                from ..learn.segmenter.infer import segment_points
-
-                seg = segment_points(loaded.model, loaded.config, frame, sub_color, tta=tta)
-            else:
-                from ..learn.segmenter.geometric import segment_geometric
-
-                seg = segment_geometric(frame)
-        except VoxelGridError as e:  # a scan too large for the voxel grid, e.g. millimetres read as metres
-            fix = ("give --units mm or cm if it is not in metres" if units == "m"
-                   else f"it was read in {units}: check --units")
-            raise DataError(f"{input_}: scene {shown(scene_id)}: {e}; {fix}") from None
-        masks = np.zeros((len(seg.scores), len(coord)), bool)
-        masks[:, finite] = seg.masks
-        labels = np.full(len(coord), -1, np.int64)
-        labels[finite] = seg.labels
-        seconds = time.perf_counter() - t0
-        out.mkdir(parents=True, exist_ok=True)
-        save_predictions(out / f"{scene_id}.npz", masks, seg.scores)
-        colors = instance_colors(labels)
-        safe_coord = np.where(finite[:, None], coord, 0).astype(np.float32)
-        write_ply(out / f"{scene_id}.ply", safe_coord, colors)
-        if png:  # a top view along the up axis, in metres
-            _png(out / f"{scene_id}.png", frame, colors[finite], f"{scene_id}: {len(seg.scores)} instances")
-        row: dict = {"scene": scene_id, "points": len(coord), "instances": int(len(seg.scores)),
-                     "seconds": round(seconds, 2), "npz": str(out / f"{scene_id}.npz")}
-        if sample is not None and (sample.instance >= 0).any():
-            m = summarize([match_scene(sample.instance, masks, seg.scores, valid=sample.valid, scene_id=scene_id)])
-            row.update({k: round(m[k], 4) for k in ("AP", "AP50", "AP25", "AR")})
-        n_done += 1
+    if threads:
+        torch.set_num_threads(threads)
+    predictor = Predictor.load(list(checkpoint) if checkpoint else None, method=method, tta=tta)
+    for row in segment_scan(input_, out, predictor, png=png, up_axis=up_axis, units=units):
         if as_json:
             typer.echo(json.dumps(row))
         else:
             extra = "".join(f"  {k} {row[k]:.3f}" for k in ("AP", "AP50", "AP25") if k in row)
-            typer.echo(f"{shown(scene_id)}: {row['instances']} instances in {row['seconds']:.1f} s{extra} -> "
-                       f"{shown(out / scene_id, 400)}.npz, .ply")
+            typer.echo(f"{shown(row['scene'])}: {row['instances']} instances in {row['seconds']:.1f} s{extra} -> "
+                       f"{shown(out / row['scene'], 400)}.npz, .ply")
