@@ -80,3 +80,29 @@ def test_planner_choice(layout, llm, expected):
     assert planner_name(cfg) == expected and expected in PLANNERS
     if expected == "rules":
         assert isinstance(make_planner(cfg), RulePlanner)
+
+
+def test_models_are_built_by_name_and_a_new_one_is_one_registration():
+    torch = pytest.importorskip("torch")
+    from assist3d.learn.engine.config import ModelConfig
+    from assist3d.learn.models.mask3d import Mask3D
+    from assist3d.learn.models.zoo import MODELS, build_model
+    from assist3d.learn.segmenter.config import NetConfig
+    from assist3d.learn.segmenter.model import Segmenter
+
+    assert {"segmenter", "mask3d"} <= set(MODELS.names())
+    assert isinstance(build_model("segmenter", NetConfig()), Segmenter)
+    small = ModelConfig(enc_channels=(8, 8, 8, 8), dec_channels=(8, 8, 8, 8), enc_blocks=(1, 1, 1, 1),
+                        dec_blocks=(1, 1, 1, 1), stem_channels=8, hidden=16, ffn=16, heads=2)
+    assert isinstance(build_model("mask3d", small), Mask3D)
+
+    @MODELS.register("test-linear")
+    def _linear(width: int) -> torch.nn.Module:
+        return torch.nn.Linear(width, 1)
+
+    try:
+        assert build_model("test-linear", 3).in_features == 3
+    finally:
+        MODELS.remove("test-linear")
+    with pytest.raises(ConfigError, match="unknown model 'segmentr'; did you mean 'segmenter'"):
+        build_model("segmentr", NetConfig())

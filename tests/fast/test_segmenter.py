@@ -960,3 +960,49 @@ def test_predictor_segments_a_scan_from_python_and_takes_a_registered_step(tmp_p
         Predictor.load(method="hybird")
     with pytest.raises(DataError, match="no weights"):
         Predictor.load(tmp_path / "x.pt", method="geometric")
+
+
+def test_weighted_mix_draws_each_set_in_proportion():
+    """--weight: a set's share of the drawn scenes is weight x scenes / sum (fails if the weights are
+    ignored: unweighted, set a would get 10 / 70 of the draws, not 10 / 40)."""
+    from assist3d.learn.segmenter.loader import build_batch, mix_probabilities
+
+    probs = mix_probabilities([10, 60], [1.0, 0.5])
+    assert probs.shape == (70,) and probs.sum() == pytest.approx(1.0)
+    assert probs[:10].sum() == pytest.approx(10 / 40) and probs[10:].sum() == pytest.approx(30 / 40)
+    rng = np.random.default_rng(0)
+    scenes = [Scene(coord=rng.random((50, 3), dtype=np.float32) * 2, color=np.zeros((50, 3), np.uint8),
+                    instance=np.full(50, i, np.int32)) for i in range(70)]
+    cfg = parse_segmenter_config({**TINY_NET, "optim": {**TINY_NET["optim"], "batch_size": 4}})
+    import assist3d.learn.segmenter.loader as loader_mod
+
+    drawn: list[int] = []
+    real_make = loader_mod.make_example
+    try:
+        loader_mod.make_example = lambda scene, cfg, rng: drawn.append(int(scene.instance[0])) or None
+        for step in range(500):
+            build_batch(scenes, cfg, 7, step, probs)
+        share_a = np.mean(np.asarray(drawn) < 10)
+        assert abs(share_a - 0.25) < 0.03, share_a
+        drawn.clear()
+        for step in range(500):
+            build_batch(scenes, cfg, 7, step)  # unweighted: uniform over the pooled scenes
+        assert abs(np.mean(np.asarray(drawn) < 10) - 10 / 70) < 0.03
+    finally:
+        loader_mod.make_example = real_make
+    for bad in ([1.0], [-1.0, 1.0], [0.0, 0.0], [float("nan"), 1.0]):
+        with pytest.raises(ConfigError):
+            mix_probabilities([10, 60], bad)
+
+
+def test_probe_takes_one_weight_per_training_set_and_records_it():
+    from assist3d.learn.segmenter.probe import ProbeRequest
+
+    cfg = parse_segmenter_config(TINY_NET)
+    with pytest.raises(ConfigError, match="2 --weight values for 1 --train"):
+        ProbeRequest(train=("a",), eval=("b",), budget=Budget(steps=2), seeds=1, config=cfg, weights=(1.0, 0.5))
+    plain = ProbeRequest(train=("a", "b"), eval=("c",), budget=Budget(steps=2), seeds=1, config=cfg)
+    ones = ProbeRequest(train=("a", "b"), eval=("c",), budget=Budget(steps=2), seeds=1, config=cfg, weights=(1.0, 1.0))
+    mixed = ProbeRequest(train=("a", "b"), eval=("c",), budget=Budget(steps=2), seeds=1, config=cfg, weights=(1.0, 0.5))
+    assert plain.as_dict() == ones.as_dict() and "weights" not in plain.as_dict()  # folders from before resume
+    assert mixed.as_dict()["weights"] == [1.0, 0.5] and mixed.weighted and not ones.weighted

@@ -98,6 +98,9 @@ def _fmt(x: float | None) -> str:
 
 def probe_cmd(
     train: list[str] = typer.Option(..., "--train", help="training set FORMAT:PATH (repeatable; all are pooled)"),
+    weight: Optional[list[float]] = typer.Option(None, "--weight", help="one per --train, in order: draw that set's "
+                                                 "scenes W times as often as a scene of weight 1 (the paper's real + "
+                                                 "0.5 x synthetic: --weight 1 --weight 0.5); default all 1"),
     eval_: list[str] = typer.Option(..., "--eval", help="real scans FORMAT:PATH to segment zero-shot (repeatable)"),
     minutes: Optional[float] = typer.Option(None, "--minutes", help="training budget per seed in minutes"),
     steps: Optional[int] = typer.Option(None, "--steps", help="training budget per seed in steps (deterministic)"),
@@ -137,7 +140,7 @@ def probe_cmd(
     cfg_data = _segmenter_config(config)
     req = ProbeRequest(train=tuple(train), eval=tuple(eval_), budget=Budget(steps=steps, minutes=minutes),
                        seeds=seeds, config=parse_segmenter_config(cfg_data, str(config or "defaults")),
-                       max_train_scenes=max_train_scenes)
+                       max_train_scenes=max_train_scenes, weights=tuple(weight or ()))
     if threads:
         torch.set_num_threads(threads)
     console = Console(stderr=True)

@@ -23,8 +23,7 @@ from torch.utils.data import DistributedSampler
 from ...core.contracts import PointSample
 from ...core.errors import ConfigError, DataError
 from ...core.fileio import write_bytes_atomic, write_text_atomic
-from ..models.mask3d import Mask3D
-from ..models.sparse import use_backend
+from ..models import zoo
 from .config import ModelConfig, TrainConfig, dump_train_config, parse_train_config
 from .dist import DistInfo, all_reduce_mean, init_distributed, shutdown
 from .loader import PreparedBatch, Source, epoch_batches, prepare_batch
@@ -69,9 +68,8 @@ def resolve_device(name: str) -> str:
 
 
 def build_model(cfg: ModelConfig) -> torch.nn.Module:
-    kwargs = cfg.model_dump()
-    backend = kwargs.pop("backend")
-    return use_backend(Mask3D(**kwargs), backend)
+    """The Mask3D-style model of a training config (the ``mask3d`` entry of the model registry)."""
+    return zoo.build_model("mask3d", cfg)
 
 
 def save_checkpoint(path: Path, model: torch.nn.Module, optimizer: Any, scheduler: Any, epoch: int, step: int,

@@ -13,7 +13,8 @@ import torch
 from torch import nn
 
 from .decoder import LayerPrediction, MaskDecoder, SceneLevels
-from .sparse import sparse_tensor
+from .registry import MODELS
+from .sparse import sparse_tensor, use_backend
 from .unet import SparseUNet
 
 
@@ -76,3 +77,11 @@ def _batch_ranges(coords: torch.Tensor, batch_size: int) -> list[tuple[int, int]
     edges = torch.searchsorted(b, torch.arange(batch_size + 1, device=b.device)).tolist()
     return [(edges[i], edges[i + 1]) for i in range(batch_size)]
 
+
+@MODELS.register("mask3d")
+def build_mask3d(cfg) -> Mask3D:
+    """The Mask3D-style model from a training config's ``model`` section (``ModelConfig``), on its
+    ``backend``'s sparse convolution kernels."""
+    kwargs = cfg.model_dump()
+    backend = kwargs.pop("backend")
+    return use_backend(Mask3D(**kwargs), backend)

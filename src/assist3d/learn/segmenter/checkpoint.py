@@ -40,6 +40,7 @@ import torch.nn.functional as F
 from ...core.errors import DataError
 from ...core.fileio import write_bytes_atomic
 from .config import SegmenterConfig, legacy_config, parse_segmenter_config
+from ..models.zoo import build_model
 from .model import Network, Segmenter, SegmenterEnsemble
 
 FORMAT = "assist3d-segmenter"
@@ -180,7 +181,7 @@ def load_segmenter(path: str | Path, device: str = "cpu", weights: Weights = "tr
     if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor) for v in state.values()):
         raise DataError(f"{path}: not an assist3d segmenter checkpoint (state_dict is not a dict of tensors)")
     state = _dequantized(path, state, payload.get("int8_scales", {}) if payload["version"] == VERSION_INT8 else {})
-    model = Segmenter(cfg.net)
+    model = build_model("segmenter", cfg.net)
     try:
         model.load_state_dict({k: v.float() if v.is_floating_point() else v for k, v in state.items()})
     except RuntimeError as e:

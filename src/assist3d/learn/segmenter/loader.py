@@ -29,22 +29,43 @@ from .data import Example, Scene, make_example
 MAX_WORKERS = 64
 
 
-def build_batch(scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int, step: int) -> list[Example]:
-    """The examples of training step ``step``: ``batch_size`` scenes drawn with replacement, each
-    cropped, augmented and voxelised with the step's own random stream."""
+def mix_probabilities(sizes: Sequence[int], weights: Sequence[float]) -> np.ndarray:
+    """Per-scene draw probabilities of training sets of ``sizes`` scenes pooled in that order, each set's
+    scenes drawn ``weight`` times as often as a scene of weight 1. A set's share of the draws is then
+    ``weight x scenes / sum``: sampling with weight ``alpha`` gives a set's examples the expected share
+    of the loss that scaling its loss by ``alpha`` gives (the paper's real + alpha x synthetic)."""
+    if len(sizes) != len(weights):
+        raise ConfigError(f"{len(weights)} weights for {len(sizes)} training sets: give one per set")
+    w = np.asarray(weights, np.float64)
+    if not np.all(np.isfinite(w)) or (w < 0).any():
+        raise ConfigError(f"training set weights {list(weights)}: expected finite numbers >= 0")
+    per_scene = np.repeat(w, np.asarray(sizes, np.int64))
+    if per_scene.sum() <= 0:
+        raise ConfigError(f"training set weights {list(weights)}: no scene can be drawn (every weight 0)")
+    return per_scene / per_scene.sum()
+
+
+def build_batch(scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int, step: int,
+                probs: np.ndarray | None = None) -> list[Example]:
+    """The examples of training step ``step``: ``batch_size`` scenes drawn with replacement (uniformly,
+    or with the per-scene ``probs`` of :func:`mix_probabilities`), each cropped, augmented and
+    voxelised with the step's own random stream."""
     rng = np.random.default_rng([seed, step])
-    picks = rng.integers(len(scenes), size=cfg.optim.batch_size)
+    if probs is None:
+        picks = rng.integers(len(scenes), size=cfg.optim.batch_size)
+    else:
+        picks = rng.choice(len(scenes), size=cfg.optim.batch_size, p=probs)
     return [make_example(scenes[int(i)], cfg, rng) for i in picks]
 
 
 class _Steps(Dataset):
     """Item ``k`` is the batch of step ``k``."""
 
-    def __init__(self, scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int):
-        self.scenes, self.cfg, self.seed = scenes, cfg, seed
+    def __init__(self, scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int, probs: np.ndarray | None = None):
+        self.scenes, self.cfg, self.seed, self.probs = scenes, cfg, seed, probs
 
     def __getitem__(self, step: int) -> list[Example]:
-        return build_batch(self.scenes, self.cfg, self.seed, step)
+        return build_batch(self.scenes, self.cfg, self.seed, step, self.probs)
 
 
 class _From(Sampler):
@@ -69,13 +90,15 @@ class BatchLoader:
     """
 
     def __init__(self, scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int, start: int = 0, *,
-                 workers: int = 0, prefetch: int = 2):
+                 workers: int = 0, prefetch: int = 2, probs: np.ndarray | None = None):
         if not (0 <= workers <= MAX_WORKERS):
             raise ConfigError(f"loader workers {workers}: expected 0 to {MAX_WORKERS}")
         if not scenes:
             raise ConfigError("no training scenes")
         self.next_step = start
-        self._data = _Steps(scenes, cfg, seed)
+        if probs is not None and len(probs) != len(scenes):
+            raise ConfigError(f"{len(probs)} draw probabilities for {len(scenes)} training scenes")
+        self._data = _Steps(scenes, cfg, seed, probs)
         self._loader = DataLoader(self._data, batch_size=None, sampler=_From(start), num_workers=workers,
                                   collate_fn=_as_is, prefetch_factor=max(1, prefetch) if workers else None)
         self._it: Iterator[list[Example]] | None = None

@@ -10,6 +10,7 @@ from __future__ import annotations
 import torch
 from torch import nn
 
+from ..models.registry import MODELS
 from ..models.sparse import SparseTensor, sparse_tensor
 from ..models.unet import SparseUNet, make_norm
 from .config import NetConfig
@@ -28,6 +29,7 @@ class _Head(nn.Module):
         return self.fc2(torch.relu(y.feats))
 
 
+@MODELS.register("segmenter")
 class Segmenter(nn.Module):
     """``forward(coords (V, 4) int32 [batch, x, y, z], feats (V, C))`` -> (fg logit (V,), offset (V, 3) m)."""
 

@@ -54,6 +54,7 @@ from .data import Scene
 from .geometric import segment_geometric
 from .hybrid import HYBRID_GEOMETRIC, HybridConfig, segment_hybrid
 from .infer import segment_points
+from .loader import mix_probabilities
 from .superpoints import SuperpointConfig
 from .train import Budget, train_segmenter
 
@@ -97,11 +98,25 @@ class ProbeRequest:
     seeds: int
     config: SegmenterConfig
     max_train_scenes: int = 0
+    #: one weight per training set (each of its scenes drawn that many times as often as a scene of
+    #: weight 1, :func:`.loader.mix_probabilities`); () = every scene alike
+    weights: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.weights and len(self.weights) != len(self.train):
+            raise ConfigError(f"{len(self.weights)} --weight values for {len(self.train)} --train sets: give one per set")
+
+    @property
+    def weighted(self) -> bool:
+        return bool(self.weights) and len(set(self.weights)) > 1
 
     def as_dict(self) -> dict:
-        return {"train": list(self.train), "eval": list(self.eval), "budget": self.budget.as_dict(),
-                "seeds": self.seeds, "max_train_scenes": self.max_train_scenes,
-                "config": self.config.model_dump(mode="json")}
+        out = {"train": list(self.train), "eval": list(self.eval), "budget": self.budget.as_dict(),
+               "seeds": self.seeds, "max_train_scenes": self.max_train_scenes,
+               "config": self.config.model_dump(mode="json")}
+        if self.weighted:  # recorded only when it changes the draws, so folders from before resume
+            out["weights"] = list(self.weights)
+        return out
 
 
 def load_training_scenes(specs: Sequence[str], max_scenes: int = 0,
@@ -121,6 +136,14 @@ def load_training_scenes(specs: Sequence[str], max_scenes: int = 0,
     if not scenes:
         raise DataError(f"no usable training scenes in {', '.join(specs)}")
     return scenes
+
+
+def _training_mix(req: "ProbeRequest", progress: Callable[[int, int], None]) -> tuple[list[Scene], np.ndarray | None]:
+    """The pooled training scenes and, for a weighted request, their draw probabilities."""
+    if not req.weighted:
+        return load_training_scenes(req.train, req.max_train_scenes, progress=progress), None
+    sets = [load_training_scenes([spec], req.max_train_scenes, progress=progress) for spec in req.train]
+    return [s for one in sets for s in one], mix_probabilities([len(one) for one in sets], req.weights)
 
 
 def bootstrap(matches: Sequence[SceneMatches], seed: int = 0, draws: int = BOOTSTRAP_DRAWS) -> dict[str, list[float]]:
@@ -255,12 +278,12 @@ def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", lo
         if not model_path.is_file():
             if scenes is None:
                 emit("load_start", {})
-                scenes = load_training_scenes(req.train, req.max_train_scenes,
-                                              progress=lambda k, n: emit("load", {"done": k, "total": n}))
+                scenes, probs = _training_mix(req, lambda k, n: emit("load", {"done": k, "total": n}))
             emit("train_start", {"seed": seed})
             rec = train_segmenter(req.config, scenes, sdir, seed=seed, budget=req.budget,
-                                  meta={"train": list(req.train)}, device=device,
-                                  loader_workers=loader_workers,
+                                  meta={"train": list(req.train)} | ({"weights": list(req.weights)} if req.weighted
+                                                                     else {}),
+                                  device=device, loader_workers=loader_workers, probs=probs,
                                   on_step=lambda row: emit("step", {"seed": seed, **row}))
             loaded = load_segmenter(rec.checkpoint)  # with optim.ema_decay: the averaged weights
             save_segmenter(model_path, loaded.model, req.config,
@@ -323,7 +346,8 @@ def run_probe_jobs(req: ProbeRequest, out_dir: str | Path, *, jobs: int, device:
     base = [sys.executable, "-m", "assist3d", "probe", *[f"--train={t}" for t in req.train],
             *[f"--eval={e}" for e in req.eval], f"--steps={req.budget.steps}", f"--out={out}", f"--config={cfg_path}",
             f"--max-train-scenes={req.max_train_scenes}", f"--threads={threads}", f"--device={device}",
-            f"--loader-workers={loader_workers}", "--json", *(["--hybrid"] if hybrid else [])]
+            f"--loader-workers={loader_workers}", "--json", *(["--hybrid"] if hybrid else []),
+            *[f"--weight={w!r}" for w in req.weights]]
     child_env = {**os.environ, PARENT_ENV: str(os.getpid())}  # the child stops if this process dies
     pending, running, failed = list(todo), {}, {}
     try:

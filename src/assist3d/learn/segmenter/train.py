@@ -23,6 +23,7 @@ import torch.nn.functional as F
 
 from ..engine.loggers import CsvLog, TrainLogger, close_all, log_all
 from ..models.sparse import resolve_precision, use_precision
+from ..models.zoo import build_model
 from ...core.errors import ConfigError
 from .checkpoint import load_segmenter, save_segmenter
 from .config import SegmenterConfig
@@ -111,7 +112,7 @@ def update_ema(ema: Segmenter, model: Segmenter, decay: float, step: int) -> Non
 def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str | Path, *, seed: int,
                     budget: Budget, meta: dict | None = None, device: str = "cpu", loader_workers: int = 0,
                     on_step: Callable[[dict], None] | None = None,
-                    loggers: Sequence[TrainLogger] = ()) -> TrainRecord:
+                    loggers: Sequence[TrainLogger] = (), probs: np.ndarray | None = None) -> TrainRecord:
     """Train on ``scenes`` into ``out_dir/last.pt`` (resumed when it exists); returns the record.
 
     Each step's row (``step, train_seconds, lr, loss, bce, offset, direction``) goes to
@@ -120,6 +121,7 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
 
     ``loader_workers`` processes build the coming steps' examples while the network trains
     (:mod:`.loader`); the batches, and so the result, are the same for any number of workers.
+    ``probs`` (per scene, :func:`.loader.mix_probabilities`) weights the draws; None draws uniformly.
     """
     if not scenes:
         raise ConfigError("no training scenes")
@@ -127,7 +129,7 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
     out.mkdir(parents=True, exist_ok=True)
     last = out / "last.pt"
     torch.manual_seed(seed)
-    model = Segmenter(cfg.net).to(device)
+    model = build_model("segmenter", cfg.net).to(device)
     precision = resolve_precision(cfg.optim.precision, device)
     use_precision(model, precision)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.optim.lr, weight_decay=cfg.optim.weight_decay)
@@ -164,7 +166,7 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
     try:
         last_save = time.perf_counter()
         model.train()
-        with BatchLoader(scenes, cfg, seed, step, workers=loader_workers) as loader:
+        with BatchLoader(scenes, cfg, seed, step, workers=loader_workers, probs=probs) as loader:
             while budget.progress(step, seconds) < 1.0:
                 t0 = time.perf_counter()
                 _, examples = loader.next()
