@@ -50,10 +50,14 @@ def sh3d_dir() -> Path:
 
 @pytest.fixture
 def load_script() -> Callable[[str], ModuleType]:
-    """``load_script("name")`` imports ``scripts/name.py`` (the scripts are not a package)."""
+    """``load_script("name")`` imports ``scripts/name.py`` (a user's tool) or, failing that,
+    ``experiments/tools/name.py`` (an experiment's); neither folder is a package."""
 
     def load(name: str) -> ModuleType:
-        spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
+        path = ROOT / "scripts" / f"{name}.py"
+        if not path.is_file():
+            path = ROOT / "experiments" / "tools" / f"{name}.py"
+        spec = importlib.util.spec_from_file_location(name, path)
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
         return module

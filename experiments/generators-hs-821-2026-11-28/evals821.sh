@@ -6,8 +6,8 @@ for g in mesh-sampled randomrooms; do for k in 0 1 2; do
   M=$S/$g-household-sparse/seed_$k/model.pt; O=$E/$g-$k
   [ -f $S/$g-household-sparse/seed_$k/result.json ] || continue
   mkdir -p $O
-  [ -f $O/r2-clean.json ] || python scripts/noise_robustness.py --model $M --sigma 0 --methods learned hybrid --threads 2 --out $O/r2-clean.json
+  [ -f $O/r2-clean.json ] || python experiments/tools/noise_robustness.py --model $M --sigma 0 --methods learned hybrid --threads 2 --out $O/r2-clean.json
   for s in 0 1 2 3 4; do
-    [ -f $O/r2-1mm-seed$s.json ] || python scripts/noise_robustness.py --model $M --sigma 0.001 --seed $s --methods learned hybrid --threads 2 --out $O/r2-1mm-seed$s.json
+    [ -f $O/r2-1mm-seed$s.json ] || python experiments/tools/noise_robustness.py --model $M --sigma 0.001 --seed $s --methods learned hybrid --threads 2 --out $O/r2-1mm-seed$s.json
   done
 done; done

@@ -4,7 +4,7 @@
 
 ASSIST-3D: the ship candidate's three seeds (../ship-candidate-2026-11-28/result.json, seed1/, seed2/).
 Baselines: per_seed/GEN-household-sparse-seedK.json here (each a probe seed's result.json). The plan's
-amendment: eval/GEN-K/ here (six evaluations each, scripts/noise_robustness.py), ASSIST-3D's the candidate's.
+amendment: eval/GEN-K/ here (six evaluations each, experiments/tools/noise_robustness.py), ASSIST-3D's the candidate's.
 A baseline with fewer than three seeds is reported as partial, without a verdict.
 """
 

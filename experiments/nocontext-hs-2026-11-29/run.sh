@@ -15,7 +15,7 @@ for k in 0 1 2; do
   date -u
 done
 for k in 0 1 2; do
-  [ -f $D/s0451-seed$k.json ] || python scripts/noise_robustness.py --model $O/seed_$k/model.pt --sigma 0 \
+  [ -f $D/s0451-seed$k.json ] || python experiments/tools/noise_robustness.py --model $O/seed_$k/model.pt --sigma 0 \
     --methods learned hybrid --threads 2 --out $D/s0451-seed$k.json > $S/s0451-$k.log 2>&1
 done
 echo ALLDONE; date -u

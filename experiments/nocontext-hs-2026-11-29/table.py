@@ -3,7 +3,7 @@
     python experiments/nocontext-hs-2026-11-29/table.py
 
 ASSIST-3D: arm A's three committed seeds (../holodeck-why-2026-11-28/per_seed/). no-context: per_seed/ here.
-scene0451_01: s0451-seedK.json here (scripts/noise_robustness.py --sigma 0, today's inference).
+scene0451_01: s0451-seedK.json here (experiments/tools/noise_robustness.py --sigma 0, today's inference).
 """
 
 from __future__ import annotations

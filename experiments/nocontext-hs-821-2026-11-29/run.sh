@@ -11,9 +11,9 @@ for k in 0 1 2; do
     --out $O --json > $S/probe821-nc.json 2> $S/probe821-nc-$k.log || exit 1
   mkdir -p $D/per_seed && cp $O/seed_$k/result.json $D/per_seed/no-context-household-sparse-seed$k.json
   E=$D/eval/no-context-$k; mkdir -p $E; M=$O/seed_$k/model.pt
-  [ -f $E/r2-clean.json ] || python scripts/noise_robustness.py --model $M --sigma 0 --methods learned hybrid --threads 2 --out $E/r2-clean.json
+  [ -f $E/r2-clean.json ] || python experiments/tools/noise_robustness.py --model $M --sigma 0 --methods learned hybrid --threads 2 --out $E/r2-clean.json
   for s in 0 1 2 3 4; do
-    [ -f $E/r2-1mm-seed$s.json ] || python scripts/noise_robustness.py --model $M --sigma 0.001 --seed $s --methods learned hybrid --threads 2 --out $E/r2-1mm-seed$s.json
+    [ -f $E/r2-1mm-seed$s.json ] || python experiments/tools/noise_robustness.py --model $M --sigma 0.001 --seed $s --methods learned hybrid --threads 2 --out $E/r2-1mm-seed$s.json
   done
 done
 echo ALLDONE; date -u

@@ -4,7 +4,7 @@
 
 ASSIST-3D: the ship candidate's three seeds (../ship-candidate-2026-11-28/result.json, seed1/, seed2/), the
 plan's fixed reference. no-context: per_seed/ here (each a probe seed's result.json). Six evaluations per
-model (clean + five 1 mm draws, learned and hybrid, scripts/noise_robustness.py): eval/no-context-K/ here,
+model (clean + five 1 mm draws, learned and hybrid, experiments/tools/noise_robustness.py): eval/no-context-K/ here,
 ASSIST-3D's the candidate's. Fewer than three no-context seeds: partial, no verdict.
 """
 

@@ -5,7 +5,7 @@ against today's planes (refine = 0), on the clean scans and 1 mm noise draws 0-4
 
 refine 0: noise-base.json (sigma 0) and noise-1mm-seed*.json; refine 2: refine/r2-clean.json and
 refine/r2-1mm-seed*.json; steadiness: change-1mm-{geometric,hybrid}.json against
-refine/change-r2-{geometric,hybrid}.json (all beside this file, made by scripts/noise_robustness.py).
+refine/change-r2-{geometric,hybrid}.json (all beside this file, made by experiments/tools/noise_robustness.py).
 """
 
 from __future__ import annotations

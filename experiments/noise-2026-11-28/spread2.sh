@@ -11,9 +11,9 @@ for g in mesh-sampled randomrooms; do for k in 0 1 2; do
 echo "start $(date -u)"
 for key in assist3d-0 assist3d-1 assist3d-2 mesh-sampled-0 mesh-sampled-1 mesh-sampled-2 randomrooms-0 randomrooms-1 randomrooms-2; do
   m=${M[$key]}
-  python scripts/noise_robustness.py --model $m --sigma 0 --methods learned hybrid --refine-planes 0 --eval $DEV --threads 2 --out $O/$key-clean.json
+  python experiments/tools/noise_robustness.py --model $m --sigma 0 --methods learned hybrid --refine-planes 0 --eval $DEV --threads 2 --out $O/$key-clean.json
   for s in 0 1 2 3 4; do
-    python scripts/noise_robustness.py --model $m --sigma 0.001 --seed $s --methods learned hybrid --refine-planes 0 --eval $DEV --threads 2 --out $O/$key-seed$s.json
+    python experiments/tools/noise_robustness.py --model $m --sigma 0.001 --seed $s --methods learned hybrid --refine-planes 0 --eval $DEV --threads 2 --out $O/$key-seed$s.json
   done
 done
 echo "done $(date -u)"

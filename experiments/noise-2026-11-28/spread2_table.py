@@ -3,7 +3,7 @@
     python experiments/noise-2026-11-28/spread2_table.py
 
 Files: spread2/GEN-K-clean.json and spread2/GEN-K-seedS.json beside this file (spread2.sh:
-scripts/noise_robustness.py, household-sparse 200-step model K of generator GEN, dev scans, hybrid without the
+experiments/tools/noise_robustness.py, household-sparse 200-step model K of generator GEN, dev scans, hybrid without the
 plane refit). Beside it, not part of the reading: the ship candidate's three 821-step seeds (its six
 evaluations each, with the plane refit, dev scans).
 """

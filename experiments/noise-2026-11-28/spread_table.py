@@ -4,7 +4,7 @@
 
 Clean figures: the six ASSIST-3D seeds of the generator comparison with today's defaults
 (../fidelity-ema-2026-11-27/per_seed/assist3d-seedK.json, learned and hybrid dev AP50; hybrid made without
-the plane refit). Noisy: spread/mK-seedS.json beside this file (scripts/noise_robustness.py --model
+the plane refit). Noisy: spread/mK-seedS.json beside this file (experiments/tools/noise_robustness.py --model
 .../assist3d/seed_K/model.pt --sigma 0.001 --seed S --methods learned hybrid --refine-planes 0, dev scans).
 """
 

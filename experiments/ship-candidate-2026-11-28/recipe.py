@@ -3,7 +3,7 @@
     python experiments/ship-candidate-2026-11-28/recipe.py
 
 Seed 0: the files beside this file; seeds 1 and 2: seed1/ and seed2/ (each six evaluations of
-scripts/noise_robustness.py, today's inference, dev scans and scene0451_01; read by rule.py's
+experiments/tools/noise_robustness.py, today's inference, dev scans and scene0451_01; read by rule.py's
 ``figures``). S = the mean AP50 over the six evaluations, per evaluation set.
 """
 

@@ -5,7 +5,7 @@
 FOLDER (default: this folder, the candidate, seed 0) holds another model's six files in the same
 names, e.g. seed1/ for the second seed, which the plan reports without a decision of its own.
 
-Candidate: r2-clean.json and r2-1mm-seed0..4.json beside this file (scripts/noise_robustness.py with the
+Candidate: r2-clean.json and r2-1mm-seed0..4.json beside this file (experiments/tools/noise_robustness.py with the
 candidate's model, today's inference, dev scans and scene0451_01). Shipped model: the same files in
 ../noise-2026-11-28/refine/. S = mean hybrid AP50 over the six evaluations, per evaluation set.
 """

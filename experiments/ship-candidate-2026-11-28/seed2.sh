@@ -10,8 +10,8 @@ cp /work/scratch/s20/ship-cand1/seed_1/result.json $S/ship-cand2/seed_1/
 assist3d probe --train assist3d:$D --eval array:$DEV --steps 821 --seeds 3 --threads 2 --loader-workers 0 --out $S/ship-cand2 --json > $S/ship-cand2.json 2> $S/ship-cand2.log
 echo "trained $(date -u)"
 M=$S/ship-cand2/seed_2/model.pt
-python scripts/noise_robustness.py --model $M --sigma 0 --methods learned hybrid --threads 2 --out $O/r2-clean.json
+python experiments/tools/noise_robustness.py --model $M --sigma 0 --methods learned hybrid --threads 2 --out $O/r2-clean.json
 for s in 0 1 2 3 4; do
-  python scripts/noise_robustness.py --model $M --sigma 0.001 --seed $s --methods learned hybrid --threads 2 --out $O/r2-1mm-seed$s.json
+  python experiments/tools/noise_robustness.py --model $M --sigma 0.001 --seed $s --methods learned hybrid --threads 2 --out $O/r2-1mm-seed$s.json
 done
 echo "done $(date -u)"

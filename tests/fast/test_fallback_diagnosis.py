@@ -1,4 +1,4 @@
-"""scripts/fallback_diagnosis.py: the per-object categories behind the "Fallback proposals" figures of
+"""experiments/tools/fallback_diagnosis.py: the per-object categories behind the "Fallback proposals" figures of
 docs/fidelity.md."""
 
 from __future__ import annotations

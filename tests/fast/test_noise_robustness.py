@@ -1,4 +1,4 @@
-"""scripts/noise_robustness.py: the denoising measured (and not adopted) in docs/fidelity.md, "Noisy scans"."""
+"""experiments/tools/noise_robustness.py: the denoising measured (and not adopted) in docs/fidelity.md, "Noisy scans"."""
 
 from __future__ import annotations
 

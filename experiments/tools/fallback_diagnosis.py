@@ -1,7 +1,7 @@
 """Where hybrid inference loses real objects (docs/fidelity.md, "Fallback proposals"): every ground-truth
 object of the real scans, classified by the prediction that overlaps it best.
 
-    python scripts/fallback_diagnosis.py [--checkpoint MODEL.pt] [--recipe first|default|learned]
+    python experiments/tools/fallback_diagnosis.py [--checkpoint MODEL.pt] [--recipe first|default|learned]
         [--eval array:../shared/data/real/dev] [--json out.json]
 
 Per object (>= 100 points, ScanNet protocol): ``matched`` (IoU > 0.5), ``partial`` (the best mask lies

@@ -1,13 +1,13 @@
 """Hybrid inference variants on held-out generated scenes (docs/fidelity.md, "Fallback proposals"):
 how the fallback proposals and the stability ranking do where the network is in its own domain.
 
-    python scripts/hybrid_generated.py MODEL.pt [MODEL.pt ...] --data assist3d:HELD_OUT [--scenes 60]
+    python experiments/tools/hybrid_generated.py MODEL.pt [MODEL.pt ...] --data assist3d:HELD_OUT [--scenes 60]
         [--out generated.json]
 
 HELD_OUT is a generated dataset none of the models was trained on (docs/fidelity.md used dataset
 seed 1: ``assist3d generate --num-scenes 180 --seed 1 --preset assist3d``). Scenes are thinned to
 ~2.5 points per occupied 5 cm voxel like the real scans (seeded by the scene id, as in
-``scripts/proposal_scorer.py``); every generated instance counts as an object. Rows per model:
+``experiments/tools/proposal_scorer.py``); every generated instance counts as an object. Rows per model:
 ``learned`` (the network's instances), ``hybrid_v1`` (the first hybrid recipe), ``hybrid`` (the
 default of ``assist3d segment``) and ``hybrid+stability``; AP, AP50, AP25 and AR over the scenes.
 """

@@ -5,12 +5,12 @@ depth points, a LiDAR sweep). This adds seeded Gaussian noise of standard deviat
 (per axis) to every point of each real scan and segments it as ``assist3d segment`` does, scored
 against the scan's own labels:
 
-    python scripts/noise_robustness.py --sigma 0 0.0025 0.005 0.01 --out noise.json
+    python experiments/tools/noise_robustness.py --sigma 0 0.0025 0.005 0.01 --out noise.json
         [--model MODEL.pt] [--eval array:../shared/data/real/dev --eval array:...scene0451_01.npy]
         [--denoise 0 1]  (denoise_points below: off and on)
 
-    python scripts/noise_robustness.py --summarize noise-seed*.json   (mean ± std over the files' seeds)
-    python scripts/noise_robustness.py --sigma 0.001 --mask-change 0 1 2 --out change.json
+    python experiments/tools/noise_robustness.py --summarize noise-seed*.json   (mean ± std over the files' seeds)
+    python experiments/tools/noise_robustness.py --sigma 0.001 --mask-change 0 1 2 --out change.json
         (how far the masks move, apart from the metric: mask_change below)
 
 The figures of docs/fidelity.md "Noisy scans" before the plane refit was adopted for hybrid inference
@@ -219,7 +219,7 @@ def main() -> None:
     if args.out is None:
         ap.error("--out is required (unless --summarize)")
     torch.set_num_threads(args.threads)
-    here = Path(__file__).resolve().parents[1]
+    here = Path(__file__).resolve().parents[2]
     specs = args.eval or [f"array:{here.parent / 'shared/data/real/dev'}",
                           f"array:{here.parent / 'shared/data/real/scannet_scene0451_01.npy'}"]
     model_path = args.model or shipped_model_path()

@@ -8,7 +8,7 @@ augmentation) and the per-voxel outputs are cached; the variants only change wha
     dual      plus proposals from the unshifted foreground voxels (6 cm), as PointGroup does
     (combinations with '+', and 'nms3' for an NMS threshold of 0.3)
 
-    python scripts/inference_variants.py MODEL.pt CACHE.npz [--variants base,tta,ms,tta+ms]
+    python experiments/tools/inference_variants.py MODEL.pt CACHE.npz [--variants base,tta,ms,tta+ms]
         [--eval array:../shared/data/real/dev --eval array:../shared/data/real/scannet_scene0451_01.npy]
 """
 

@@ -9,7 +9,7 @@ how tightly the offsets vote, agreement with the network's instances), fitted on
 proposals on held-out generated scenes with their IoU as target, then used instead of the network's
 score before non-maximum suppression.
 
-    python scripts/proposal_scorer.py MODEL.pt --train assist3d:HELD_OUT_DATA [--scenes 60]
+    python experiments/tools/proposal_scorer.py MODEL.pt --train assist3d:HELD_OUT_DATA [--scenes 60]
         [--target all|scannet] [--eval array:../shared/data/real/dev --eval array:...scene0451_01.npy]
         [--out scorer.json]
 
