@@ -919,12 +919,20 @@ def test_bfloat16_training_learns_and_its_model_runs_in_float32(tiny_scenes, tmp
     assert np.abs(fg_fast - fg_ref).mean() < 0.05  # six steps apart only by rounding
 
 
-def test_a_config_from_before_precision_trains_in_float32():
-    """Checkpoints and probe folders written before optim.precision existed trained in float32."""
+def test_a_config_from_before_precision_trains_in_float32(tmp_path):
+    """Checkpoints and probe folders written before optim.precision existed trained in float32; a
+    probe folder of that time is refused for today's default with the key and its old value named."""
     from assist3d.learn.segmenter.config import legacy_config
+    from assist3d.learn.segmenter.probe import ProbeRequest, _check_request
     old = {**TINY_NET, "optim": {k: v for k, v in TINY_NET["optim"].items()}}
     assert parse_segmenter_config(legacy_config(old)).optim.precision == "float32"
     assert parse_segmenter_config(TINY_NET).optim.precision == "auto"
+    req = ProbeRequest(train=("a",), eval=("b",), budget=Budget(steps=2), seeds=1, config=parse_segmenter_config(TINY_NET))
+    stored = req.as_dict()
+    del stored["config"]["optim"]["precision"]
+    (tmp_path / "probe.json").write_text(json.dumps(stored))
+    with pytest.raises(ConfigError, match=r"before optim\.precision existed: a --config with optim\.precision: float32"):
+        _check_request(tmp_path, req)
 
 
 def test_predictor_segments_a_scan_from_python_and_takes_a_registered_step(tmp_path):

@@ -49,7 +49,7 @@ from ...bench.evaluation.ap import METRIC_KEYS, SceneMatches, match_scene, summa
 from ...bench.evaluation.predictions import save_predictions
 from ...core.fileio import write_json_atomic, write_text_atomic
 from .checkpoint import load_segmenter, save_segmenter
-from .config import SegmenterConfig, legacy_config
+from .config import BEFORE_ADDED, SegmenterConfig, legacy_config
 from .data import Scene
 from .geometric import segment_geometric
 from .hybrid import HYBRID_GEOMETRIC, HybridConfig, segment_hybrid
@@ -224,15 +224,20 @@ def _check_request(out: Path, req: ProbeRequest) -> None:
             old = json.loads(path.read_text())
         except (OSError, json.JSONDecodeError) as e:
             raise DataError(f"{path}: unreadable ({e}); remove it or use another --out") from None
-        legacy = isinstance(old, dict) and legacy_config(old.get("config")) is not old.get("config")
-        if legacy:  # started before optim.ema_decay existed, i.e. without weight averaging
+        stored = old.get("config") if isinstance(old, dict) else None
+        missing = [(sec, key) for sec, key in BEFORE_ADDED
+                   if isinstance(stored, dict) and isinstance(stored.get(sec), dict) and key not in stored[sec]]
+        legacy = bool(missing)
+        if legacy:  # started before these keys existed: it ran with their values of that time
             old = {**old, "config": legacy_config(old["config"])}
         old_cmp = {k: v for k, v in old.items() if k != "seeds"}
         new_cmp = {k: v for k, v in mine.items() if k != "seeds"}
         if old_cmp != new_cmp:
             diff = sorted(k for k in set(old_cmp) | set(new_cmp) if old_cmp.get(k) != new_cmp.get(k))
-            hint = ("; it was started before weight averaging became the default: --config "
-                    "configs/segmenter-pre-ema.yaml (optim.ema_decay 0) finishes it" if legacy else "")
+            then = ", ".join(f"{sec}.{key}: {BEFORE_ADDED[(sec, key)]}" for sec, key in missing)
+            hint = (f"; it was started before {', '.join(f'{sec}.{key}' for sec, key in missing)} existed: "
+                    f"a --config with {then} finishes it (configs/segmenter-pre-ema.yaml sets both)"
+                    if legacy else "")
             raise ConfigError(f"{out}: holds a probe with other settings ({', '.join(diff)} differ); "
                               f"use another --out to start a new probe{hint}")
     write_json_atomic(path, mine)
