@@ -86,7 +86,7 @@ def test_the_household_sparse_config_is_the_measured_one_and_keeps_the_template_
     list exactly the room templates' classes, so a change to the templates cannot silently leave it behind."""
     root = Path(__file__).resolve().parents[2]
     shipped = root / "configs" / "household-sparse.yaml"
-    measured = root / "docs" / "results" / "holodeck-why-2026-11-28" / "household-sparse.yaml"
+    measured = root / "experiments" / "holodeck-why-2026-11-28" / "household-sparse.yaml"
     for preset in ("assist3d", "mesh-sampled"):
         a, b = compose(shipped, preset), compose(measured, preset)
         assert a.model_dump() == b.model_dump()
