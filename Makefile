@@ -4,11 +4,12 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 OUT    ?= demo_out
 
-.PHONY: demo test setup setup-full bench clean help
+.PHONY: demo test test-fast setup setup-full bench clean help
 
 help:
 	@echo "make demo   - set up and generate a small dataset from the built-in assets, then picture it"
-	@echo "make test   - set up (with the training, LLM and sim extras) and run the test suite"
+	@echo "make test   - set up (with the training, LLM and sim extras) and run the test suite (both tiers)"
+	@echo "make test-fast - the fast tier only (under a minute; what to run on every edit)"
 	@echo "make bench  - time the generator at paper settings"
 
 $(BIN)/activate:
@@ -33,6 +34,9 @@ demo: $(VENV)/.core
 	@echo "dataset in $(OUT)/, picture of the first scene in $(OUT)/preview.png"
 
 test: $(VENV)/.full
+	$(BIN)/python -m pytest -q -m "not acceptance"
+
+test-fast: $(VENV)/.full
 	$(BIN)/python -m pytest -q
 
 bench: $(VENV)/.core

@@ -47,6 +47,7 @@ def test_registry_has_enough_families_in_every_group():
 
 
 @pytest.mark.parametrize("name", NAMES)
+@pytest.mark.slow
 def test_family_builds_valid_canonical_mesh(name):
     fam = FAMILIES[name]
     for seed in SEEDS:
@@ -79,6 +80,7 @@ def test_family_builds_valid_canonical_mesh(name):
 
 
 @pytest.mark.parametrize("name", [n for n in NAMES if n not in {"superquadric", "blob", "convex_shape"}])
+@pytest.mark.slow
 def test_supports_lie_on_the_mesh(name):
     """A ray dropped from just above a support polygon lands on it; nothing intrudes below its clearance."""
     seen = 0
@@ -179,6 +181,7 @@ def _hashes(root: Path) -> dict[str, str]:
     return out
 
 
+@pytest.mark.slow
 def test_library_is_byte_identical_for_a_seed_and_a_prefix_of_bigger_ones(tmp_path):
     a = build_library(tmp_path / "a", count=40, seed=11)
     b = build_library(tmp_path / "b", count=40, seed=11)
@@ -203,6 +206,7 @@ def test_workers_do_not_change_the_output(tmp_path):
     assert (tmp_path / "one" / "index.json").read_bytes() == (tmp_path / "two" / "index.json").read_bytes()
 
 
+@pytest.mark.slow
 def test_library_of_200_covers_every_family_and_group(tmp_path):
     cat = build_library(tmp_path / "lib", count=200, seed=0)
     recs = cat.records

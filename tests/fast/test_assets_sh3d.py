@@ -315,7 +315,7 @@ def test_fast_reader_agrees_with_trimesh_on_real_models(jar_entries):
         assert np.abs(ca.mean(0) - cb.mean(0)).max() < 3
 
 
-@pytest.mark.slow
+@pytest.mark.acceptance
 def test_full_debian_import_acceptance(tmp_path, sh3d_dir):
     """Issue 2 acceptance on all installed catalogs (~1.5 min on 2 cores; the same figures are
     printed by `assist3d assets import sh3d --json`): >= 800 assets, >= 400 classes, every group

@@ -167,6 +167,7 @@ def test_an_output_path_that_is_a_device_is_refused_not_replaced(tmp_path):
     assert node.is_char_device() and sorted(p.name for p in tmp_path.iterdir()) == ["full"]
 
 
+@pytest.mark.slow
 def test_the_command_line_answers_a_file_where_a_folder_is_expected_in_one_line(tmp_path, tiny_cfg_file):
     afile = tmp_path / "afile"
     afile.write_text("x")
@@ -207,6 +208,7 @@ def test_generate_fault_mid_run_says_what_is_complete_and_keeps_it(tmp_path, mon
 # real faults: a full tmpfs, a read-only mount, a folder without write permission
 
 
+@pytest.mark.slow
 def test_disk_full_on_a_small_tmpfs_keeps_complete_scenes_and_resumes_to_the_same_bytes(
         tmpfs, tiny_cfg_file, reference4):
     mnt = tmpfs("1600k")  # room for a scene or two of the tiny config, not four
@@ -228,6 +230,7 @@ def test_disk_full_on_a_small_tmpfs_keeps_complete_scenes_and_resumes_to_the_sam
     assert digest(out) == reference4
 
 
+@pytest.mark.slow
 def test_read_only_file_system_is_one_line(tmpfs, tiny_cfg_file):
     mnt = tmpfs("1m", read_only=True)
     line = one_error_line(cli("generate", "--config", str(tiny_cfg_file), "-n", "1", "--out", str(mnt / "data")))
@@ -248,6 +251,7 @@ def _without_permission_bypass() -> tuple[str, ...]:
     return ("setpriv", "--bounding-set=-dac_override,-dac_read_search")
 
 
+@pytest.mark.slow
 def test_permission_denied_is_one_line(tmp_path, tiny_cfg_file):
     prefix = _without_permission_bypass()
     ro = tmp_path / "ro"

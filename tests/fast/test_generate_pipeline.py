@@ -88,6 +88,7 @@ def test_dataset_layout_manifest_and_labels(full_run):
         assert all(man["classes"][s] == ids[i] for i, s in zip(inst[k].tolist(), seg[k].tolist()))
 
 
+@pytest.mark.slow
 def test_scene_alone_and_with_two_workers_equal_the_full_run(full_run, tmp_path):
     out, _ = full_run
     ref = dataset_bytes(out)
@@ -127,6 +128,7 @@ def test_other_settings_in_the_same_folder_are_refused(full_run):
         generate_dataset(parse_config({**TINY, "render": {**TINY["render"], "voxel_size": 0.05}}), out, range(3))
 
 
+@pytest.mark.slow
 def test_sigkill_mid_run_then_rerun_gives_the_uninterrupted_dataset(full_run, tmp_path):
     out, _ = full_run
     cfg_file = tmp_path / "tiny.yaml"
@@ -151,6 +153,7 @@ def test_sigkill_mid_run_then_rerun_gives_the_uninterrupted_dataset(full_run, tm
     assert not list(target.rglob(".*.tmp"))
 
 
+@pytest.mark.slow
 def test_generate_show_and_bench_commands(full_run, tmp_path):
     cfg_file = tmp_path / "tiny.yaml"
     cfg_file.write_text(yaml.safe_dump(TINY))

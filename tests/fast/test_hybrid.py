@@ -42,6 +42,7 @@ def room_superpoints(room):
     return superpoints(room.coord)
 
 
+@pytest.mark.slow
 def test_superpoints_do_not_cross_object_boundaries(room, room_superpoints):
     seg = room_superpoints
     assert seg.shape == (len(room.coord),) and seg.min() == 0
@@ -102,6 +103,7 @@ def test_superpoints_of_points_too_far_apart_for_any_edge_are_single_points():
     assert sorted(seg.tolist()) == [0, 1, 2, 3, 4]
 
 
+@pytest.mark.slow
 def test_graph_segments_of_a_noisy_room_equal_the_plain_algorithm(room):
     from scipy.spatial import cKDTree
 
@@ -250,6 +252,7 @@ def test_drop_structure_links_objects_apart_that_a_wall_called_object_joins():
         combine(learned, vox, fg, offset, cluster, none, own, hybrid=HybridConfig(drop_structure=True))
 
 
+@pytest.mark.slow
 def test_geometric_with_given_planes_equals_finding_them_and_checks_their_shape(room):
     on_plane = structural_points(room.coord)
     assert on_plane.shape == (len(room.coord),) and 0 < on_plane.mean() < 1
@@ -259,6 +262,7 @@ def test_geometric_with_given_planes_equals_finding_them_and_checks_their_shape(
         segment_geometric(room.coord, on_plane=on_plane[:-1])
 
 
+@pytest.mark.slow
 def test_hybrid_on_a_toy_room_returns_ranked_consistent_masks_and_finds_the_boxes(room):
     cfg = parse_segmenter_config(TINY_NET)
     torch.manual_seed(0)
@@ -275,6 +279,7 @@ def test_hybrid_on_a_toy_room_returns_ranked_consistent_masks_and_finds_the_boxe
     assert summarize([match_scene(room.instance, dropped.masks, dropped.scores, valid=room.valid)])["AR"] > 0.7
 
 
+@pytest.mark.slow
 def test_shipped_model_hybrid_beats_learned_alone_and_the_reference_on_the_real_scan(real_scan_path):
     import time
 

@@ -136,6 +136,7 @@ def _allowed(module: str, target: str) -> bool:
     return False
 
 
+@pytest.mark.slow
 def test_no_import_cycle():
     graph, _ = _imports()
     assert _cycles(graph) == []
@@ -152,6 +153,7 @@ def _folders(graph: dict[str, set[str]]) -> dict[str, set[str]]:
     return out
 
 
+@pytest.mark.slow
 def test_no_import_cycle_between_folders():
     """Folders stack: none imports, at module level, a folder that imports it back (docs/architecture.md,
     "Restructure history"; scene/ and placement/ did while their shared geometry lived in scene/)."""
@@ -165,6 +167,7 @@ def test_folder_graph_joins_modules_of_one_folder():
     assert _cycles(_folders(graph)) == [["assist3d.placement", "assist3d.scene"]]
 
 
+@pytest.mark.slow
 def test_imports_inside_functions_follow_the_rule():
     _, local = _imports()
     bad = [f"{m}:{line} imports {t}" for m, t, line in local if not _allowed(m, t)]
@@ -175,6 +178,7 @@ def _under(module: str, names: set[str]) -> bool:
     return any(module == n or module.startswith(n + ".") for n in names)
 
 
+@pytest.mark.slow
 def test_layering():
     """core/ needs nothing else of the package; no generation module reaches learn/ or bench/,
     at module level or inside a function."""

@@ -23,8 +23,9 @@ from assist3d.core.interrupts import Interrupted, worker_pool
 from assist3d.pipeline import generate_dataset, scene_name
 from assist3d.testing import dataset_digest, descendants, wait_until_gone
 
-pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"),
-                                reason="needs Linux: /proc to find worker processes, POSIX signals")
+pytestmark = [pytest.mark.skipif(not sys.platform.startswith("linux"),
+                                 reason="needs Linux: /proc to find worker processes, POSIX signals"),
+              pytest.mark.slow]  # signals and subprocesses: the slow tier
 
 TINY = {
     "seed": 11,

@@ -161,6 +161,7 @@ def _responder(body: dict) -> Step:
 
 
 @pytest.mark.parametrize("concurrently", [False, True], ids=["serial", "concurrent"])
+@pytest.mark.slow
 def test_batched_layout_equals_the_per_group_layout_with_fewer_requests(key, tmp_path, concurrently):
     cat = _catalog(tmp_path / "cat")
     layouts, requests = {}, {}

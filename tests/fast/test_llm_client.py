@@ -25,6 +25,7 @@ def _cfg(srv, tmp_path, **kw) -> LLMConfig:
 
 
 @pytest.mark.parametrize("limit", [1, 2])
+@pytest.mark.slow
 def test_concurrency_limit_holds_across_clients(tmp_path, limit):
     """Separate clients (as in separate worker processes) share the lock-file slots."""
     with FakeServer([Step('{"ok": 1}', sleep=0.15)]) as srv:
@@ -134,6 +135,7 @@ def test_schema_values_and_fences():
     assert parse_json_text("{'objects': []}")[1] is not None  # Python literals are not JSON
 
 
+@pytest.mark.slow
 def test_concurrency_limit_holds_across_processes(tmp_path):
     import subprocess
     import sys

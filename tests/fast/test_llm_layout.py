@@ -87,6 +87,7 @@ def test_build_layout_records_llm_and_rules_groups(tmp_path, monkeypatch, caplog
     assert [i.to_json() for i in again.instances] == [i.to_json() for i in lay.instances]
 
 
+@pytest.mark.slow
 def test_build_layout_survives_a_stalling_and_an_oversized_server(tmp_path, monkeypatch):
     import time
 
@@ -133,6 +134,7 @@ def _llm_cfg(url: str, tmp_path, **llm) -> GenerateConfig:
                 "cache_dir": str(tmp_path / "llm"), **llm}})
 
 
+@pytest.mark.slow
 def test_on_top_groups_are_planned_concurrently_and_give_the_serial_layout(tmp_path, monkeypatch):
     monkeypatch.setenv("OPENAI_API_KEY", SENTINEL)
     cat = _catalog(tmp_path / "cat")

@@ -226,6 +226,7 @@ def test_oversized_answer_falls_back(secret_env, tmp_path, step):
     assert plan.stats["llm_calls"] == 1 and plan.stats["rule_seconds"] == 0.0  # fallback stats kept
 
 
+@pytest.mark.slow
 def test_stall_returns_within_timeout(secret_env, tmp_path):
     with FakeServer([Step(GOOD_FLOOR, sleep=30)]) as srv:
         plan, elapsed = _plan(_cfg(srv, tmp_path, retries=2))
@@ -234,6 +235,7 @@ def test_stall_returns_within_timeout(secret_env, tmp_path):
     assert any("timeout_s" in n for n in plan.notes)
 
 
+@pytest.mark.slow
 def test_trickling_answer_returns_within_timeout(secret_env, tmp_path):
     with FakeServer([Step(GOOD_FLOOR, trickle=True)]) as srv:
         plan, elapsed = _plan(_cfg(srv, tmp_path, retries=2))

@@ -136,6 +136,7 @@ def test_bad_score_gets_one_repair(secret_env, tmp_path):
     assert score is None and len(srv.requests) == 2 and "repair" in details["error"]
 
 
+@pytest.mark.slow
 def test_stall_gives_none_within_timeout(secret_env, tmp_path):
     with FakeServer([Step(GOOD, sleep=20)]) as srv:
         t0 = time.monotonic()

@@ -166,6 +166,7 @@ def test_asset_feature_cache_is_reused(catalog, monkeypatch):
         clusters.asset_features(catalog, seed=1)
 
 
+@pytest.mark.slow
 def test_geometry_diversity_se_tracks_the_spread_over_fresh_draws_of_scenes():
     """The scene resampling's standard error is about the true spread of the value over fresh datasets
     when a scene's objects share shapes; resampling instances instead would miss most of it."""

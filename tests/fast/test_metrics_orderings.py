@@ -25,7 +25,7 @@ from assist3d.scene.layout import build_layout
 PRESETS = ("assist3d", "randomrooms", "holodeck-style", "no-context")
 
 
-@pytest.mark.slow
+@pytest.mark.acceptance
 def test_generator_orderings_on_a_large_catalog(tmp_path, sh3d_dir):
     import numpy as np
 

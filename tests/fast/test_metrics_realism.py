@@ -155,6 +155,7 @@ def test_matched_sample_removes_the_small_sample_penalty():
         matched_sample(small, big, rng)
 
 
+@pytest.mark.slow
 def test_realism_reference_script_scores_datasets_at_each_rooms_size(tmp_path, capsys, load_script):
     """scripts/realism_reference.py --loro --score --matched: one row per dataset and held-out room,
     seeded (the same output twice), scores in 0-100, and refused without --loro."""
@@ -190,6 +191,7 @@ def test_realism_reference_script_scores_datasets_at_each_rooms_size(tmp_path, c
         script.main([f"array:{tmp_path / 'real'}", "--score", f"array:{tmp_path / 'gen'}", "--matched", "5"])
 
 
+@pytest.mark.slow
 def test_shipped_reference_is_the_dev_scans_with_every_annotated_object(real_dev_dir):
     """The shipped quantiles are what ``scripts/realism_reference.py`` gives on the real dev scans read
     with ``?objects=annotated`` today (a change in the statistics or the reader would show here); the
@@ -248,6 +250,7 @@ def _scenes(rng, n_scenes, shift=0.0, objects=(4, 30)):
     return total
 
 
+@pytest.mark.slow
 def test_standard_error_tracks_the_spread_of_scores_over_fresh_draws_of_scenes():
     """The scene-bootstrap standard error of one dataset is of the order of the standard deviation
     of the score over independent datasets from the same generator, shrinks with more scenes, and is
@@ -318,6 +321,7 @@ def test_room_structure_labelled_as_an_object_is_flagged_and_furniture_is_not():
     assert flagged.objects == 5  # still counted
 
 
+@pytest.mark.slow
 def test_real_scans_structure_warning(real_dev_dir, caplog):
     """The dev scans (the shipped reference) hold no instance that looks like room structure;
     scene0451_01 labels its ceiling and a floor-to-ceiling element with label 0, and reading it for

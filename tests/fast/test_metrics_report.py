@@ -8,6 +8,7 @@ import math
 import shutil
 
 import numpy as np
+import pytest
 import trimesh
 
 from assist3d.assets.catalog import Catalog
@@ -174,6 +175,7 @@ def test_shared_codebook_does_not_depend_on_the_order_datasets_are_listed_in():
     assert not np.array_equal(shared_codebook(sets, seed=1).centers, books[0].centers)  # seeded, not fixed
 
 
+@pytest.mark.slow
 def test_geometry_diversity_sd_is_the_spread_over_codebook_draws():
     """`geometry_diversity_sd`: the standard deviation of a dataset's value over draw 0 (the codebook
     the value is read with, unchanged) and the other draws, which differ and do not depend on the order."""

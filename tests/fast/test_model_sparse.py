@@ -50,6 +50,7 @@ def _close(a, b):
 
 
 @pytest.mark.parametrize("k", [1, 3, 5])
+@pytest.mark.slow
 def test_submanifold_equals_dense(k, backend):
     gen = torch.Generator().manual_seed(k)
     coords = _random_sites(gen, 2, 7, 150)
@@ -160,6 +161,7 @@ def small_blocks(monkeypatch):
 
 
 @pytest.mark.parametrize("k", [1, 3, 5])
+@pytest.mark.slow
 def test_im2col_convolutions_equal_the_per_offset_path(k, small_blocks):
     """The im2col path (the bfloat16 training path's arithmetic, run here in float32 and float64)
     gives the per-offset path's outputs and gradients for every operator, over several padded blocks."""
@@ -182,6 +184,7 @@ def test_im2col_convolutions_equal_the_per_offset_path(k, small_blocks):
                 close(a, b)
 
 
+@pytest.mark.slow
 def test_bfloat16_precision_stays_close_and_float32_at_the_boundary():
     gen = torch.Generator().manual_seed(3)
     coords = _random_sites(gen, 1, 16, 900)

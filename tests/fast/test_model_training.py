@@ -107,6 +107,7 @@ def test_majority_label_matches_a_per_group_vote_on_random_labels():
     assert (majority_label(np.zeros(0, np.int64), np.zeros(0, np.int64), 2) == [-1, -1]).all()
 
 
+@pytest.mark.slow
 def test_one_training_step_lowers_the_loss():
     cfg = parse_train_config(TINY)
     trainer = Trainer(cfg, MemorySource(_scenes()), steps_total=50)
@@ -139,6 +140,7 @@ def test_data_arg_kinds():
     assert parse_data_arg("synthetic=pointcept:/x").resolved_kind() == "synthetic"
 
 
+@pytest.mark.slow
 def test_train_checkpoint_resume_round_trip(tmp_path):
     cfg = parse_train_config({**TINY, "optim": {**TINY["optim"], "epochs": 2}})
     src = MemorySource(_scenes())
@@ -161,6 +163,7 @@ def test_train_checkpoint_resume_round_trip(tmp_path):
         torch.testing.assert_close(again["model"][k], v)
 
 
+@pytest.mark.slow
 def test_resume_continues_training(tmp_path):
     cfg1 = parse_train_config({**TINY, "optim": {**TINY["optim"], "epochs": 1}})
     src = MemorySource(_scenes())
@@ -224,6 +227,7 @@ def test_train_cli_requires_data(tmp_path):
     assert res.exit_code != 0 and "no training data" in str(res.exception)
 
 
+@pytest.mark.slow
 def test_predict_cli_writes_evaluation_format(tmp_path):
     from typer.testing import CliRunner
 
@@ -330,6 +334,7 @@ def test_loader_workers_prepare_the_same_batches_in_order():
     assert not np.array_equal(other_epoch[0].scenes[0][0].coords, here[0].scenes[0][0].coords)  # fresh draws
 
 
+@pytest.mark.slow
 def test_training_with_loader_workers_equals_training_without(tmp_path):
     # TINY trains with threads: 1 (multi-threaded CPU reductions are not bit-reproducible)
     results = []

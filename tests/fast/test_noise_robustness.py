@@ -8,6 +8,7 @@ import pytest
 pytest.importorskip("torch")
 
 
+@pytest.mark.slow
 def test_denoise_thins_a_noisy_surface_moving_points_along_its_normal_only(load_script):
     denoise_points = load_script("noise_robustness").denoise_points
 

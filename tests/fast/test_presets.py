@@ -59,6 +59,7 @@ def test_unknown_preset_and_bad_user_values_are_named():
         apply_preset({"selection": {"pairing_prob": 3.0}}, "no-context")
 
 
+@pytest.mark.slow
 def test_room_template_classes_exist_in_their_groups_of_the_procedural_library():
     """Each floor item of a room template must be a floor class of the procedural library, each
     wall item a wall class and each small object an on-top class; else the Holodeck-style baseline

@@ -23,6 +23,9 @@ from assist3d.pipeline import generate_dataset, scene_name
 from assist3d.testing import dataset_digest
 from test_generate_pipeline import TINY
 
+pytestmark = pytest.mark.slow  # signals and subprocesses: the slow tier
+
+
 ray = pytest.importorskip("ray")
 
 SCENES = 4

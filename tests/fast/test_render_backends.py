@@ -27,6 +27,7 @@ def small_scene():
     return room, combine_parts(parts)
 
 
+@pytest.mark.slow
 def test_embree_and_numpy_agree_pixel_by_pixel():
     room, scene = small_scene()
     cfg = RenderConfig(**SMALL, views_per_point=6)

@@ -91,6 +91,7 @@ def test_same_seed_same_bytes_whatever_the_thread_count(scene, rendered):
     assert third.sample.coord.tobytes() != rendered.sample.coord.tobytes()
 
 
+@pytest.mark.slow
 def test_numpy_backend_gives_the_same_cloud(scene, rendered):
     room, mesh = scene
     small = dict(SMALL, width=48, height=36, fx=43.3, fy=43.3, views_per_point=4)

@@ -55,6 +55,7 @@ def result(scene):
     return render_point_cloud(mesh, room, RenderConfig(**TINY), rng=np.random.default_rng(0), scene_id="t")
 
 
+@pytest.mark.slow
 def test_points_lie_on_the_true_surfaces(scene, result):
     room, mesh = scene
     s, voxel = result.sample, RenderConfig().tsdf_voxel
@@ -99,6 +100,7 @@ def test_stats_name_the_source_and_the_mesh(result):
     assert st["mesh_pieces"] >= 1 and st["far_from_hits_dropped"] >= 0
 
 
+@pytest.mark.slow
 def test_same_seed_same_bytes_whatever_the_thread_count(scene, result):
     room, mesh = scene
     again = render_point_cloud(mesh, room, RenderConfig(**TINY), rng=np.random.default_rng(0))
@@ -121,6 +123,7 @@ def test_slabbed_extraction_matches_one_slab(scene, result, monkeypatch):
 
 
 @needs_skimage
+@pytest.mark.slow
 def test_depth_noise_is_integrated_deterministically(scene):
     room, mesh = scene
     cfg = RenderConfig(**dict(TINY, width=96, height=72, fx=86.7, fy=86.7), depth_noise=0.003)

@@ -215,6 +215,7 @@ def test_topdown_png(tmp_path):
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5000
 
 
+@pytest.mark.slow
 def test_cli_layout_and_layout_png(tmp_path):
     pytest.importorskip("assist3d.scene.assemble")
     from typer.testing import CliRunner

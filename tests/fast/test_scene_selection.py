@@ -179,6 +179,7 @@ def test_pool_cache_follows_catalog_changes(tmp_path):
     assert "hovercraft" in after  # the cached pools were rebuilt for the changed catalog
 
 
+@pytest.mark.slow
 def test_assets_per_class_keeps_a_fixed_few_models_per_class(tmp_path):
     from assist3d.assets.procedural import build_library
 

@@ -45,6 +45,7 @@ def test_height_test_catches_a_banknote_under_a_loaf():
     assert not z_overlap(np.array([0.7508]), np.array([0.8]), boxes).any()  # resting on top of it is fine
 
 
+@pytest.mark.slow
 def test_flat_objects_on_one_support_do_not_interpenetrate(tmp_path):
     cat = _catalog(tmp_path / "cat")
     cfg = GenerateConfig.model_validate({"selection": {"floor_count": 3, "wall_count": 0, "on_top_count": 6,

@@ -195,6 +195,7 @@ def test_crop_window_centre_never_has_a_negative_range():
         assert len(out.coord) >= 10 and np.isfinite(out.coord).all()
 
 
+@pytest.mark.slow
 def test_loss_falls_over_a_few_steps_on_two_generated_scenes(tiny_scenes, tmp_path):
     cfg = parse_segmenter_config(TINY_NET)
     fixed = [make_example(s, cfg, None) for s in tiny_scenes]
@@ -216,6 +217,7 @@ def one_thread():
     torch.set_num_threads(old)
 
 
+@pytest.mark.slow
 def test_resumed_training_equals_an_uninterrupted_run(tiny_scenes, tmp_path, monkeypatch, one_thread):
     cfg = parse_segmenter_config(TINY_NET)
     train_segmenter(cfg, tiny_scenes, tmp_path / "full", seed=3, budget=Budget(steps=4))
@@ -239,6 +241,7 @@ def test_resumed_training_equals_an_uninterrupted_run(tiny_scenes, tmp_path, mon
     assert [r.split(",")[3:] for r in log_cut] == [r.split(",")[3:] for r in log_full]  # same losses
 
 
+@pytest.mark.slow
 def test_weight_average_resumes_exactly_and_follows_its_formula(tiny_scenes, tmp_path, monkeypatch, one_thread):
     """optim.ema_decay: the averaged weights travel in last.pt, a resumed run ends with the same
     average as an uninterrupted one, and the average is not the last weights."""
@@ -335,6 +338,7 @@ def test_loader_workers_build_the_same_batches_in_order(tiny_scenes):
         assert not np.array_equal(other.next()[1][0].feats, want[0][1][0].feats)
 
 
+@pytest.mark.slow
 def test_training_with_loader_workers_equals_training_without(tiny_scenes, tmp_path, one_thread):
     cfg = parse_segmenter_config(TINY_NET)
     train_segmenter(cfg, tiny_scenes, tmp_path / "w0", seed=2, budget=Budget(steps=3))
@@ -439,6 +443,7 @@ def test_int8_checkpoint_with_mismatched_scales_is_refused(tmp_path):
         load_segmenter(path)
 
 
+@pytest.mark.slow
 def test_probe_runs_end_to_end_writes_the_json_contract_and_resumes(tiny_data, tmp_path):
     out = tmp_path / "probe"
     cfg = tmp_path / "seg.yaml"
@@ -469,6 +474,7 @@ def test_probe_runs_end_to_end_writes_the_json_contract_and_resumes(tiny_data, t
     assert r3.exit_code != 0 and "other settings" in str(r3.exception or r3.output)
 
 
+@pytest.mark.slow
 def test_probe_first_seed_splits_a_probe_and_a_full_run_reads_the_parts(tiny_data, tmp_path):
     cfg = tmp_path / "seg.yaml"
     cfg.write_text(json.dumps(TINY_NET))
@@ -509,6 +515,7 @@ def test_probe_jobs_need_a_step_budget_and_a_seed_process_stops_without_its_pare
         die_with_parent()
 
 
+@pytest.mark.slow
 def test_probe_jobs_name_the_failed_processes_and_their_logs(tmp_path):
     out = tmp_path / "probe"
     r = runner.invoke(app, ["probe", "--train", f"assist3d:{tmp_path / 'missing'}", "--eval", "array:x.npy",
@@ -519,6 +526,7 @@ def test_probe_jobs_name_the_failed_processes_and_their_logs(tmp_path):
     assert "missing" in (out / "jobs" / "seed_0.log").read_text()
 
 
+@pytest.mark.slow
 def test_probe_hybrid_scores_segment_default_and_is_added_to_a_finished_folder(tiny_data, tmp_path):
     from assist3d.learn.segmenter.hybrid import segment_hybrid
 
@@ -616,6 +624,7 @@ def test_geometric_reference_finds_boxes_on_a_floor_between_walls():
     assert seg.masks.shape[1] == len(s.coord) and (seg.masks.sum(0) <= 1).all()
 
 
+@pytest.mark.slow
 def test_refit_planes_follow_all_inliers_and_keep_the_reference_working():
     """GeometricConfig.refine: the least-squares plane of a noisy tilted patch is its true plane (not
     the tilt of three points), its normal keeps the RANSAC side; with refine the toy room's floor and
@@ -663,6 +672,7 @@ def _write_model(path: Path) -> Path:
     return save_segmenter(path, Segmenter(cfg.net), cfg)
 
 
+@pytest.mark.slow
 def test_segment_a_ply_and_an_npy_and_refuse_bad_input(tmp_path):
     from assist3d.bench.data.ply import read_ply, write_ply
 
@@ -714,6 +724,7 @@ def test_every_up_axis_turns_to_z_by_a_proper_exact_rotation():
         to_segmenter_frame(pts, "w")
 
 
+@pytest.mark.slow
 def test_segment_reads_y_up_and_millimetre_scans_with_the_frame_flags(tmp_path):
     """A y-up export of a room (x, y, z) -> (x, z, -y) segmented with --up-axis y gives exactly the
     z-up result, for the geometric reference and through the network (hybrid); its PLY keeps the
@@ -767,6 +778,7 @@ def test_frame_hint_flags_scans_on_their_side_or_in_centimetres_only():
     assert "--units" in frame_hint(room * 100)
 
 
+@pytest.mark.slow
 def test_segment_tta_flag_reaches_the_network_and_is_refused_without_one(tmp_path):
     """--tta changes the scores (the network's outputs are averaged over 8 copies), keeps the output
     contract, and the geometric reference, which has no network, refuses it."""
@@ -787,6 +799,7 @@ def test_segment_tta_flag_reaches_the_network_and_is_refused_without_one(tmp_pat
     assert r.exit_code != 0 and "--tta" in (str(r.exception) + r.output)
 
 
+@pytest.mark.slow
 def test_an_ensemble_averages_its_members_and_refuses_other_features(tmp_path):
     """Two checkpoints read as one model: the mean of their probabilities and offsets; one member
     alone is the plain model; a member on other voxels is refused by name; `segment` takes both."""
@@ -820,6 +833,7 @@ def test_an_ensemble_averages_its_members_and_refuses_other_features(tmp_path):
 SHARED_SCAN = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "real" / "scannet_scene0451_01.npy"
 
 
+@pytest.mark.slow
 def test_shipped_model_segments_the_real_scan_and_beats_the_geometric_reference(real_scan_path):
     import time
 
@@ -839,6 +853,7 @@ def test_shipped_model_segments_the_real_scan_and_beats_the_geometric_reference(
     assert learned["AP50"] > reference["AP50"], (learned.summary, reference.summary)
 
 
+@pytest.mark.slow
 def test_segment_reads_reader_specs_and_reports_ap_when_labels_are_known(tmp_path):
     s = _room_with_boxes()
     a = np.zeros((len(s.coord), 8), np.float32)
@@ -897,6 +912,7 @@ def test_the_documented_segmenter_config_is_the_defaults_and_names_every_key():
 
 @pytest.mark.skipif(not __import__("assist3d.learn.models.sparse", fromlist=["x"]).native_bfloat16(),
                     reason="this CPU has no native bfloat16 matmul")
+@pytest.mark.slow
 def test_bfloat16_training_learns_and_its_model_runs_in_float32(tiny_scenes, tmp_path, one_thread):
     """optim.precision bfloat16 (the fast path): the same steps as float32 to within bfloat16's
     rounding, recorded in the checkpoint; the model it writes loads and predicts on the float32 path."""

@@ -219,6 +219,7 @@ def test_llm_answer_with_escape_codes_is_logged_inert(tmp_path, caplog):
         assert c.decode() not in text
 
 
+@pytest.mark.slow
 def test_cli_run_with_an_escape_code_llm_leaves_no_raw_controls_in_its_output(tmp_path):
     """`assist3d layout` against an endpoint answering terminal escape codes in three ways."""
     answers = itertools.cycle([Step(status=400, raw=EVIL.encode()), Step(raw=EVIL.encode()),
