@@ -12,9 +12,9 @@ import pytest
 
 from assist3d.config import LLMConfig
 from assist3d.core.contracts import PlacedInstance, Relation
-from assist3d.llm.planner import LLMPlanner
-from assist3d.llm.prompts import render_batch_messages
-from assist3d.llm.schema import split_batch_answer
+from assist3d.planning.llm_planner import LLMPlanner
+from assist3d.planning.llm_prompts import render_batch_messages
+from assist3d.planning.llm_schema import split_batch_answer
 from assist3d.planning.relations import PlanRequest, validate_plan
 from llm_fakeserver import SENTINEL, FakeServer, Step
 from test_llm_layout import MODEL as LAYOUT_MODEL, _catalog, _llm_cfg

@@ -12,8 +12,10 @@ from assist3d.config import LLMConfig
 from assist3d.core.errors import ConfigError, LLMError
 from assist3d.llm.cache import ResponseCache, cache_key
 from assist3d.llm.client import ChatClient, Usage, parse_endpoint
-from assist3d.llm.prompts import load_template, render_plan_messages
-from assist3d.llm.schema import check_answer, parse_json_text
+from assist3d.llm.prompts import load_template
+from assist3d.llm.schema import parse_json_text
+from assist3d.planning.llm_prompts import render_plan_messages
+from assist3d.planning.llm_schema import check_answer
 from llm_fakeserver import FakeServer, Step
 from test_llm_planner import FLOOR, ONTOP, WALL
 

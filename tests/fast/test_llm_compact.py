@@ -10,9 +10,10 @@ import pytest
 from pydantic import ValidationError
 
 from assist3d.config import LLMConfig
-from assist3d.llm.planner import LLMPlanner
-from assist3d.llm.prompts import render_batch_messages, render_plan_messages
-from assist3d.llm.schema import check_answer, expand_compact_entry, salvage_objects
+from assist3d.llm.schema import salvage_objects
+from assist3d.planning.llm_planner import LLMPlanner
+from assist3d.planning.llm_prompts import render_batch_messages, render_plan_messages
+from assist3d.planning.llm_schema import check_answer, expand_compact_entry
 from assist3d.planning.relations import validate_plan
 from llm_fakeserver import SENTINEL, FakeServer, Step
 from test_llm_batch import ONSHELF

@@ -12,7 +12,7 @@ import pytest
 
 from assist3d.config import LLMConfig
 from assist3d.core.contracts import AssetRecord, Opening, PlacedInstance, Relation, Room
-from assist3d.llm.planner import LLMPlanner
+from assist3d.planning.llm_planner import LLMPlanner
 from assist3d.planning.relations import GroupPlan, PlannedObject, PlanRequest, group_kind, validate_plan
 from llm_fakeserver import SENTINEL, FakeServer, Step, files_containing
 

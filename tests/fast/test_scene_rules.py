@@ -136,7 +136,7 @@ def test_make_planner(monkeypatch, caplog):
         p2 = planners.make_planner(GenerateConfig())
     assert isinstance(p1, RulePlanner) and isinstance(p2, RulePlanner)
     assert [r.message for r in caplog.records].count("layout: rule-based planner (no LLM endpoint configured)") == 1
-    llm = pytest.importorskip("assist3d.llm.planner")
+    llm = pytest.importorskip("assist3d.planning.llm_planner")
     cfg = GenerateConfig.model_validate({"llm": {"base_url": "http://127.0.0.1:9/v1", "model": "m"}})
     p = planners.make_planner(cfg)
     assert isinstance(p, llm.LLMPlanner) and isinstance(p.fallback, RulePlanner)

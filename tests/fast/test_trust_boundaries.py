@@ -200,7 +200,7 @@ def _llm_log_messages(records: list[logging.LogRecord]) -> str:
 def test_llm_answer_with_escape_codes_is_logged_inert(tmp_path, caplog):
     """Every answer path that quotes the answer (HTTP error body, a body that is not a chat
     completion, a relation name in the content) logs it escaped."""
-    from assist3d.llm.planner import LLMPlanner
+    from assist3d.planning.llm_planner import LLMPlanner
 
     caplog.set_level(logging.DEBUG, logger="assist3d")
     steps = [Step(status=400, raw=EVIL.encode()),  # refused JSON mode: logged, asked again without it

@@ -37,7 +37,7 @@ def _rules(cfg: GenerateConfig) -> Planner:
 
 @PLANNERS.register("llm")
 def _llm(cfg: GenerateConfig) -> Planner:
-    from ..llm.planner import LLMPlanner  # loaded only when an LLM endpoint is configured (docs/architecture.md)
+    from .llm_planner import LLMPlanner  # loaded only when an LLM endpoint is configured (docs/architecture.md)
 
     return LLMPlanner(cfg.llm, fallback=RulePlanner())
 

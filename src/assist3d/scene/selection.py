@@ -341,7 +341,7 @@ def select_objects(catalog: Catalog, cfg: SelectionConfig, rng: np.random.Genera
     is empty after the filters while floor objects are requested.
 
     With ``strategy: room-type``, ``propose(room_type, vocabulary)`` (an LLM's object plan, see
-    :meth:`assist3d.llm.planner.LLMPlanner.propose_room`) may replace the built-in template of the
+    :meth:`assist3d.planning.llm_planner.LLMPlanner.propose_room`) may replace the built-in template of the
     drawn room type; ``vocabulary`` maps "floor", "wall" and "obj" to the pools' canonical class
     names. Its stats are kept under ``stats["room_llm"]``.
     """

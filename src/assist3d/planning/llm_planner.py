@@ -5,7 +5,7 @@
 
 1. The group's prompt template is rendered (vocabulary, numbered objects with sizes, room,
    placed instances, worked example) and sent; the answer is decoded with ``json.loads`` and
-   checked by :func:`assist3d.llm.schema.check_answer`.
+   checked by :func:`assist3d.planning.llm_schema.check_answer`.
 2. Every problem (invalid JSON, unknown relation names, unknown or later targets, duplicated or
    missing objects, bad values) is sent back in ONE repair round.
 3. What is still wrong after the repair is dropped, each with a reason in ``GroupPlan.notes``
@@ -35,13 +35,15 @@ import numpy as np
 from ..config import LLMConfig
 from ..core.contracts import Relation, Room
 from ..core.errors import ConfigError, LLMError, inert
-from ..planning.relations import CROSS_GROUP, GroupPlan, PlannedObject, Planner, PlanRequest, validate_plan
 from ..core.taxonomy.roomtypes import RoomTemplate
-from .cache import ResponseCache
-from .client import ChatAnswer, ChatClient, Usage
-from .prompts import render_batch_messages, render_plan_messages, render_repair_message
-from .rooms import check_room_answer, room_messages
-from .schema import CheckedAnswer, check_answer, parse_json_text, salvage_groups, salvage_objects, split_batch_answer
+from ..llm.cache import ResponseCache
+from ..llm.client import ChatAnswer, ChatClient, Usage
+from ..llm.prompts import render_repair_message
+from ..llm.rooms import check_room_answer, room_messages
+from ..llm.schema import parse_json_text, salvage_groups, salvage_objects
+from .llm_prompts import render_batch_messages, render_plan_messages
+from .llm_schema import CheckedAnswer, check_answer, split_batch_answer
+from .relations import CROSS_GROUP, GroupPlan, PlannedObject, Planner, PlanRequest, validate_plan
 
 log = logging.getLogger(__name__)
 
