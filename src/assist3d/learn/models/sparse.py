@@ -429,6 +429,16 @@ def rows_mm(a: torch.Tensor, w: torch.Tensor) -> torch.Tensor:
     return out
 
 
+def _save_reduced(ctx, feats: torch.Tensor, weight: torch.Tensor, tables: tuple[torch.Tensor, ...],
+                  dtype: torch.dtype) -> tuple[torch.Tensor, torch.Tensor]:
+    """Features and weight in ``dtype``, saved for backward with the index ``tables``; the input dtypes
+    are kept on ``ctx`` so that the gradients come back in them."""
+    f, w = feats.to(dtype), weight.to(dtype)
+    ctx.save_for_backward(f, w, *tables)
+    ctx.in_dtypes = (feats.dtype, weight.dtype)
+    return f, w
+
+
 class _SubMConvIm2colFn(torch.autograd.Function):
     """The submanifold convolution as im2col (:func:`gather_mm` over the neighbour table): one large
     matmul per block of sites instead of one small matmul and one scatter per kernel offset. The input
@@ -445,9 +455,7 @@ class _SubMConvIm2colFn(torch.autograd.Function):
     def forward(ctx, feats: torch.Tensor, weight: torch.Tensor, table: torch.Tensor,  # type: ignore[override]
                 dtype: torch.dtype) -> torch.Tensor:
         k3, cin, cout = weight.shape
-        f, w = feats.to(dtype), weight.to(dtype)
-        ctx.save_for_backward(f, w, table)
-        ctx.in_dtypes = (feats.dtype, weight.dtype)
+        f, w = _save_reduced(ctx, feats, weight, (table,), dtype)
         return gather_mm(_with_zero_row(f), table, w.reshape(k3 * cin, cout)).to(feats.dtype)
 
     @staticmethod
@@ -472,9 +480,7 @@ class _DownConvIm2colFn(torch.autograd.Function):
     @staticmethod
     def forward(ctx, feats, weight, children, pick, dtype):  # type: ignore[override]
         _, cin, cout = weight.shape
-        f, w = feats.to(dtype), weight.to(dtype)
-        ctx.save_for_backward(f, w, children, pick)
-        ctx.in_dtypes = (feats.dtype, weight.dtype)
+        f, w = _save_reduced(ctx, feats, weight, (children, pick), dtype)
         return gather_mm(_with_zero_row(f), children, w.reshape(8 * cin, cout)).to(feats.dtype)
 
     @staticmethod
@@ -499,9 +505,7 @@ class _UpConvIm2colFn(torch.autograd.Function):
     @staticmethod
     def forward(ctx, feats, weight, children, pick, dtype):  # type: ignore[override]
         _, cin, cout = weight.shape
-        f, w = feats.to(dtype), weight.to(dtype)
-        ctx.save_for_backward(f, w, children, pick)
-        ctx.in_dtypes = (feats.dtype, weight.dtype)
+        f, w = _save_reduced(ctx, feats, weight, (children, pick), dtype)
         every = rows_mm(f, w.permute(1, 0, 2).reshape(cin, 8 * cout))  # (M, 8 * C_out)
         return every.view(-1, cout).index_select(0, pick).to(feats.dtype)
 
