@@ -11,8 +11,8 @@ The use case behind ``assist3d segment``, as a library call::
 What runs after the network is a **post-processing step** chosen by name from :data:`STEPS`
 (``hybrid``: the network's instances with the geometric components and superpoint snapping, the
 ``segment`` default; ``learned``: the network's instances alone; ``geometric``: planes removed and
-connected components, no network). Add one with ``@STEPS.register("name")`` over a function
-``(model, config, coord, color, *, tta) -> Segmentation``; ``needs_model=False`` steps run without
+connected components, no network). Add one with ``STEPS.add("name", Step(run))``, ``run`` a function
+``(model, config, coord, color, *, tta) -> Segmentation``; ``Step(run, needs_model=False)`` runs without
 weights.
 
 ``segment`` takes a scan as a user has it: points with non-finite or far-out coordinates get no
