@@ -1,6 +1,6 @@
 """The CPU segmenter's configuration (pydantic, validated; stored inside every checkpoint as JSON).
 
-Defaults are the settings measured in ``docs/fidelity.md``: 5 cm voxels, geometry-only input, a
+Defaults are the settings chosen in ``docs/fidelity.md``: 5 cm voxels, geometry-only input, a
 4-level sparse residual U-Net with per-scene normalisation, foreground + centre-offset heads,
 offset-shifted connected components for instances.
 """
@@ -69,8 +69,8 @@ class OptimConfig(Section):
     offset_weight: float = Field(1.0, ge=0.0, description="weight of the L1 loss on centre offsets (object voxels)")
     direction_weight: float = Field(0.5, ge=0.0, description="weight of the offset direction loss (minus cosine)")
     ema_decay: float = Field(0.99, ge=0.0, lt=1.0, description="exponential moving average of the weights, kept "
-                             "beside the trained ones and used as the final model (0 = off; default since "
-                             "2026-11-27 by the probe, docs/fidelity.md 'Weight averaging')")
+                             "beside the trained ones and used as the final model (0 = off; docs/fidelity.md "
+                             "'Weight averaging')")
     precision: Literal["auto", "float32", "bfloat16"] = Field(
         "auto", description="arithmetic of the sparse convolutions in training: float32, or bfloat16 inputs "
         "with float32 accumulation (im2col blocks; several times faster where the CPU multiplies bfloat16 "

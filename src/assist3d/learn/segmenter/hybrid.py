@@ -17,31 +17,24 @@ snapped to superpoints.
    the same way): a fallback proposal is dropped when it repeats one of steps 1-2;
 5. each kept mask snapped to superpoints (``superpoints.py``).
 
-The two proposal sources fail in different rooms (docs/fidelity.md: the network in sparse rooms
-whose objects stand apart, the components in cluttered ones), and snapping fixes ragged 5 cm
-boundaries. Measured with 28 trained models on the dev scans and on scene0451_01 (docs/fidelity.md,
-"Hybrid inference" and "Fallback proposals (adopted) and a stability ranking"). ``assist3d probe``
-scores the learned proposals alone (it measures training data, and the geometric proposals do not
-depend on it); ``probe --hybrid`` scores this recipe too.
+The two proposal sources fail in different rooms (the network in sparse rooms whose objects stand
+apart, the components in cluttered ones), and snapping fixes ragged 5 cm boundaries; the measurements
+are in docs/fidelity.md ("Hybrid inference", "Fallback proposals"). ``assist3d probe`` scores the learned
+proposals alone (it measures training data, and the geometric proposals do not depend on it); ``probe
+--hybrid`` scores this recipe too.
 
-``HybridConfig.stability_radii`` (off by default: measured, not adopted) multiplies the scores of
-steps 1-2 by ``0.5 + 0.5 x stability``, the mean over those radii of each proposal's best IoU with
-the network's instances linked at that radius (a persistence criterion, as in MSER or HDBSCAN): it
-lifted the shipped model's dev AP50 from 0.265 to 0.363 and lowered it for 12 of 28 models.
+Three variants were measured and not adopted; each is off by default and kept for the experiments that
+measured it (docs/fidelity.md says what each did):
 
-``HybridConfig.drop_structure`` (off by default: measured, not adopted) links the network's instances
-of steps 1 and 3 without the 5 cm voxels that lie on the room's structural planes (more than half of
-their points on a plane of the geometric reference), since real walls are often called object by the
-network and objects merge through them; the proposals' scores are unchanged. Over 13 models it
-raised the network's instances alone (dev AP50 0.167 to 0.225) but not the hybrid (0.243 to 0.240;
-docs/fidelity.md, "Structural planes").
-
-``HybridConfig.snap_rank`` (off by default: measured, not adopted) multiplies the scores of steps 1-3
-by each proposal's agreement with the superpoints (the point IoU between the proposal and its snapped
-version, :func:`snap_agreement`, which is 1 for a mask that covers no superpoint by more than half)
-before the tiers are formed: a fragment cuts through surface patches, a whole object is a union of
-them. Over 17 models it raised dev AP50 for all (0.247 to 0.327) and lowered scene0451_01 for 11
-(0.100 to 0.077; docs/fidelity.md, "Ranking by agreement with the superpoints").
+* ``HybridConfig.stability_radii`` multiplies the scores of steps 1-2 by ``0.5 + 0.5 x stability``, the
+  mean over those radii of each proposal's best IoU with the network's instances linked at that radius
+  (a persistence criterion, as in MSER or HDBSCAN);
+* ``HybridConfig.drop_structure`` links the network's instances of steps 1 and 3 without the 5 cm voxels
+  that lie on the room's structural planes (more than half of their points on a plane of the geometric
+  reference); the proposals' scores are unchanged;
+* ``HybridConfig.snap_rank`` multiplies the scores of steps 1-3 by each proposal's agreement with the
+  superpoints (the point IoU between the proposal and its snapped version, :func:`snap_agreement`) before
+  the tiers are formed: a fragment cuts through surface patches, a whole object is a union of them.
 
 Masks may overlap (a component can hold two learned instances without an IoU above 0.5 with
 either); ``labels`` gives each point the best-scoring mask that holds it.
@@ -65,9 +58,8 @@ NMS_IOU = 0.5
 
 
 #: The geometric settings of hybrid inference: the reference's, with each RANSAC plane refit twice to
-#: its inliers, which keeps the components steadier when a scan moves by a millimetre (measured and
-#: adopted by the rule of experiments/noise-2026-11-28/plan-refine.md; docs/fidelity.md, "Noisy
-#: scans"). The reference row itself (``segment --method geometric``) keeps ``GeometricConfig()``.
+#: its inliers, which keeps the components steadier when a scan moves by a millimetre (docs/fidelity.md,
+#: "Noisy scans"). The reference row itself (``segment --method geometric``) keeps ``GeometricConfig()``.
 HYBRID_GEOMETRIC = GeometricConfig(refine=2)
 
 

@@ -74,7 +74,7 @@ def hybrid_settings() -> dict:
 
 
 #: The value a setting had before it was recorded, for figures stored without it (the plane refit of
-#: hybrid inference did not exist before 2026-11-28: those figures were made without it).
+#: hybrid inference came after the first hybrid figures were stored: those were made without it).
 SETTINGS_BEFORE_RECORDED: dict[str, dict] = {"geometric": {"refine": 0}}
 
 
