@@ -86,7 +86,7 @@ def test_models_are_built_by_name_and_a_new_one_is_one_registration():
     torch = pytest.importorskip("torch")
     from assist3d.learn.engine.config import ModelConfig
     from assist3d.learn.models.mask3d import Mask3D
-    from assist3d.learn.models.zoo import MODELS, build_model
+    from assist3d.learn.zoo import MODELS, build_model
     from assist3d.learn.segmenter.config import NetConfig
     from assist3d.learn.segmenter.model import Segmenter
 

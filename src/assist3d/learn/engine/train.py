@@ -23,7 +23,8 @@ from torch.utils.data import DistributedSampler
 from ...core.contracts import PointSample
 from ...core.errors import ConfigError, DataError
 from ...core.fileio import write_bytes_atomic, write_text_atomic
-from ..models import zoo
+from ..models import mask3d as _mask3d  # noqa: F401  registers "mask3d"
+from ..models.registry import build_model as build_registered
 from .config import ModelConfig, TrainConfig, dump_train_config, parse_train_config
 from .dist import DistInfo, all_reduce_mean, init_distributed, shutdown
 from .loader import PreparedBatch, Source, epoch_batches, prepare_batch
@@ -69,7 +70,7 @@ def resolve_device(name: str) -> str:
 
 def build_model(cfg: ModelConfig) -> torch.nn.Module:
     """The Mask3D-style model of a training config (the ``mask3d`` entry of the model registry)."""
-    return zoo.build_model("mask3d", cfg)
+    return build_registered("mask3d", cfg)
 
 
 def save_checkpoint(path: Path, model: torch.nn.Module, optimizer: Any, scheduler: Any, epoch: int, step: int,

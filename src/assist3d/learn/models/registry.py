@@ -8,7 +8,7 @@ Each model registers itself in the module that defines it::
     def _build(cfg: MyNetConfig) -> nn.Module:
         return MyNet(cfg.width)
 
-and :mod:`assist3d.learn.models.zoo` imports every built-in model module, so
+and :mod:`assist3d.learn.zoo` imports every built-in model module, so
 ``zoo.build_model("segmenter", cfg.net)`` finds it. A new model is one file and one import line there.
 """
 
@@ -27,6 +27,6 @@ MODELS: Registry[Callable[[Any], nn.Module]] = Registry("model")
 
 def build_model(name: str, cfg: Any) -> nn.Module:
     """The model registered as ``name`` built from its config section ``cfg`` (unknown names are
-    refused with the closest registered one). Import :mod:`assist3d.learn.models.zoo` (or the model's
+    refused with the closest registered one). Import :mod:`assist3d.learn.zoo` (or the model's
     own module) first so that the entry exists."""
     return MODELS.get(name)(cfg)

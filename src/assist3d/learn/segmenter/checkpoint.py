@@ -40,7 +40,7 @@ import torch.nn.functional as F
 from ...core.errors import DataError
 from ...core.fileio import write_bytes_atomic
 from .config import SegmenterConfig, legacy_config, parse_segmenter_config
-from ..models.zoo import build_model
+from ..models.registry import build_model
 from .model import Network, Segmenter, SegmenterEnsemble
 
 FORMAT = "assist3d-segmenter"

@@ -23,7 +23,7 @@ import torch.nn.functional as F
 
 from ..engine.loggers import CsvLog, TrainLogger, close_all, log_all
 from ..models.sparse import resolve_precision, use_precision
-from ..models.zoo import build_model
+from ..models.registry import build_model
 from ...core.errors import ConfigError
 from .checkpoint import load_segmenter, save_segmenter
 from .config import SegmenterConfig
