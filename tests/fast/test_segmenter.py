@@ -150,34 +150,28 @@ def test_examples_have_consistent_targets(tiny_scenes):
     assert make_example(tiny_scenes[0], color, np.random.default_rng(0)).feats.shape[1] == 9
 
 
-def test_elastic_warp_bends_surfaces_without_tearing_them():
-    from assist3d.learn.segmenter.data import elastic_warp
-
-    rng = np.random.default_rng(0)
-    xyz = rng.uniform(0.0, 3.0, (4000, 3))
-    pairs = np.vstack([xyz, xyz + [0.02, 0.0, 0.0]])  # every point with a neighbour 2 cm away
-    warped = elastic_warp(pairs, 0.24, 0.087, np.random.default_rng(1))
-    moved = warped - pairs
-    # the displacement has about the requested size (interpolation between grid nodes shrinks it a little)
-    assert 0.05 < moved.std() < 0.1
-    # and is smooth: neighbours 2 cm apart stay within a few cm of each other (no tearing)
-    gap = np.linalg.norm(warped[4000:] - warped[:4000], axis=1)
-    assert np.percentile(np.abs(gap - 0.02), 99) < 0.02
-    # seeded, and off when the displacement is zero
-    assert np.array_equal(warped, elastic_warp(pairs, 0.24, 0.087, np.random.default_rng(1)))
-    assert np.array_equal(elastic_warp(pairs, 0.24, 0.0, rng), pairs)
-
-
-def test_examples_with_elastic_warps_keep_targets_consistent(tiny_scenes):
-    cfg = parse_segmenter_config({**TINY_NET, "augment": {"crop_m": 0.0, "elastic": [[0.24, 0.087], [0.8, 0.35]]}})
-    plain = parse_segmenter_config(TINY_NET)
-    ex = make_example(tiny_scenes[0], cfg, np.random.default_rng(0))
-    ref = make_example(tiny_scenes[0], plain, np.random.default_rng(0))
-    assert not np.array_equal(ex.coords, ref.coords) or not np.array_equal(ex.feats, ref.feats)
-    assert np.isfinite(ex.feats).all() and np.all(ex.offset[ex.fg == 0] == 0)
-    assert 0 < ex.fg.mean() < 1 and np.abs(ex.offset).max() < 10
-    with pytest.raises(ConfigError):
-        parse_segmenter_config({"augment": {"elastic": [[0.0, 0.1]]}})
+def test_retired_options_read_when_off_and_are_refused_when_on(tmp_path):
+    """augment.elastic and augment.top_cut_*, measured and not adopted, left the schema: a checkpoint or
+    probe folder that stored them switched off (as every default model did) still loads as today's; one
+    that trained with them on is refused with one line naming the file and the option."""
+    from assist3d.learn.segmenter.config import legacy_config
+    cfg = parse_segmenter_config(TINY_NET)
+    save_segmenter(tmp_path / "m.pt", Segmenter(cfg.net), cfg)
+    payload = torch.load(tmp_path / "m.pt", weights_only=True)
+    stored = json.loads(payload["config"])
+    stored["augment"].update({"elastic": [], "top_cut_p": 0.0, "top_cut_range": [1.4, 3.0]})
+    payload["config"] = json.dumps(stored)
+    torch.save(payload, tmp_path / "old.pt")
+    assert load_segmenter(tmp_path / "old.pt").config == cfg
+    stored["augment"]["elastic"] = [[0.24, 0.087]]
+    payload["config"] = json.dumps(stored)
+    torch.save(payload, tmp_path / "warped.pt")
+    with pytest.raises(ConfigError, match=r"warped\.pt.*augment\.elastic"):
+        load_segmenter(tmp_path / "warped.pt")
+    with pytest.raises(ConfigError, match="top_cut_p"):
+        legacy_config({"augment": {"top_cut_p": 0.3}}, "probe.json")
+    with pytest.raises(ConfigError):  # and today's schema refuses them outright
+        parse_segmenter_config({"augment": {"elastic": []}})
 
 
 def test_crop_window_centre_never_has_a_negative_range():

@@ -175,7 +175,7 @@ def load_segmenter(path: str | Path, device: str = "cpu", weights: Weights = "tr
     if payload.get("version") not in (VERSION, VERSION_INT8):
         raise DataError(f"{path}: segmenter checkpoint version {payload.get('version')!r}; "
                         f"this assist3d reads {VERSION} and {VERSION_INT8}")
-    cfg = parse_segmenter_config(legacy_config(_json(path, payload, "config")), f"{path} config")
+    cfg = parse_segmenter_config(legacy_config(_json(path, payload, "config"), str(path)), f"{path} config")
     meta = _json(path, payload, "meta")
     state = payload.get("state_dict")
     if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor) for v in state.values()):

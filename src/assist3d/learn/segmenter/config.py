@@ -12,11 +12,10 @@ from typing import Annotated, Any, Literal
 from pydantic import Field
 
 from ...config import Section, validate_config
+from ...core.errors import ConfigError
 
 Channels = Annotated[int, Field(ge=4, le=1024)]
 Blocks = Annotated[int, Field(ge=1, le=8)]
-Spacing = Annotated[float, Field(gt=0.0, le=10.0)]  # metres
-Displacement = Annotated[float, Field(ge=0.0, le=1.0)]  # metres
 
 
 class NetConfig(Section):
@@ -38,16 +37,10 @@ class AugmentConfig(Section):
     crop_m: float = Field(6.0, ge=0.0, le=100.0, description="random square crop edge in metres (0 = whole scene)")
     keep_min: float = Field(0.35, gt=0.0, le=1.0, description="lowest fraction of points kept (density matching)")
     keep_max: float = Field(0.8, gt=0.0, le=1.0, description="highest fraction of points kept")
-    top_cut_p: float = Field(0.0, ge=0.0, le=1.0, description="probability of removing everything above a random "
-                             "height (real scans often miss upper walls and high shelves)")
-    top_cut_range: tuple[float, float] = Field((1.4, 3.0), description="height range of that cut, metres above the floor")
     scale: float = Field(0.1, ge=0.0, le=0.5, description="uniform scale jitter +-")
     tilt_deg: float = Field(1.0, ge=0.0, le=10.0, description="random tilt about x and y, +- degrees")
     floor_shift: tuple[float, float] = Field((-0.08, 0.05), description="random z translation range, metres")
     jitter: tuple[float, float] = Field((0.005, 0.02), description="Gaussian jitter sigma range, metres")
-    elastic: tuple[tuple[Spacing, Displacement], ...] = Field(
-        (), max_length=4, description="smooth random warps, each (grid spacing m, displacement std m), applied in "
-        "order (real reconstructions are not the perfect planes and boxes of generated scenes); () = off")
     color_jitter: float = Field(0.2, ge=0.0, le=1.0, description="brightness/contrast jitter (colour input only)")
     color_drop: float = Field(0.2, ge=0.0, le=1.0, description="probability of greying the colour (colour input only)")
 
@@ -91,19 +84,37 @@ BEFORE_ADDED: dict[tuple[str, str], Any] = {("optim", "ema_decay"): 0.0,  # no w
                                            ("optim", "precision"): "float32"}
 
 
-def legacy_config(data: Any) -> Any:
-    """A stored configuration (checkpoint, ``probe.json``) completed with the values of
-    :data:`BEFORE_ADDED` for the keys it lacks, so that a file written before such a key existed
-    keeps its recipe and a resumed run stays what it was; returned unchanged (the same object) when
-    nothing is missing."""
+# Options measured and not adopted, taken out of the schema: (section, key) -> the values that mean "off"
+# (None: any value, for a setting that only mattered when another was on). A stored configuration holding one
+# of them "off" reads as today's; one that was on was trained with a recipe this version no longer runs. The
+# folders of experiments/ that measured them say what they did.
+RETIRED: dict[tuple[str, str], tuple[Any, ...] | None] = {
+    ("augment", "elastic"): ((), []),  # smooth random warps: experiments/elastic-2026-11-26
+    ("augment", "top_cut_p"): (0, 0.0),  # removing everything above a random height: experiments/topcut-2026-11-27
+    ("augment", "top_cut_range"): None,
+}
+
+
+def legacy_config(data: Any, source: str = "stored config") -> Any:
+    """A stored configuration (checkpoint, ``probe.json``) read as today's schema: completed with the
+    values of :data:`BEFORE_ADDED` for the keys it lacks (a file written before such a key existed keeps
+    its recipe and a resumed run stays what it was) and without the :data:`RETIRED` options it holds
+    switched off; a :class:`ConfigError` naming ``source`` when one was switched on. Returned unchanged
+    (the same object) when there is nothing to do."""
     if not isinstance(data, dict):
         return data
     missing = [(s, k) for s, k in BEFORE_ADDED if isinstance(data.get(s), dict) and k not in data[s]]
-    if not missing:
+    retired = [(s, k) for s, k in RETIRED if isinstance(data.get(s), dict) and k in data[s]]
+    if not missing and not retired:
         return data
     out = {s: dict(v) if isinstance(v, dict) else v for s, v in data.items()}
     for s, k in missing:
         out[s][k] = BEFORE_ADDED[(s, k)]
+    for s, k in retired:
+        off, value = RETIRED[(s, k)], out[s].pop(k)
+        if off is not None and value not in off:
+            raise ConfigError(f"{source}: {s}.{k} = {value!r} is an option that was measured, not adopted and "
+                              "taken out of this version; train without it (its experiment folder keeps the figures)")
     return out
 
 

@@ -3,8 +3,7 @@
 Every training scene, generated or real, goes through the same steps; the augmentations model what
 differs between a rendered scene and a real reconstruction (docs/fidelity.md): point density (a
 random fraction of the points is kept), floors that are neither flat nor at z = 0 (tilt, height
-shift), sensor noise (jitter), and the usual rotation, mirror and scale; optionally smooth elastic
-warps (off by default: measured, not adopted, docs/fidelity.md).
+shift), sensor noise (jitter), and the usual rotation, mirror and scale.
 """
 
 from __future__ import annotations
@@ -12,8 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import RegularGridInterpolator
-from scipy.ndimage import gaussian_filter
 
 from ...core.contracts import PointSample
 from ..engine.augment import rotation_matrix
@@ -62,14 +59,9 @@ def augment(scene: Scene, cfg: AugmentConfig, rng: np.random.Generator) -> Scene
         rows = rows[inside]
     keep = rng.uniform(cfg.keep_min, max(cfg.keep_min, cfg.keep_max))
     rows = rows[rng.random(len(rows)) < keep]
-    if cfg.top_cut_p > 0 and rng.random() < cfg.top_cut_p and len(rows):
-        floor = float(np.percentile(xyz[rows, 2], 2.0))
-        rows = rows[xyz[rows, 2] < floor + rng.uniform(*cfg.top_cut_range)]
     if len(rows) < 10:  # a degenerate crop: fall back to the whole scene
         rows = np.arange(len(xyz))
     xyz = xyz[rows]
-    for spacing, sigma in cfg.elastic:
-        xyz = elastic_warp(xyz, spacing, sigma, rng)
     xyz[:, :2] -= xyz[:, :2].mean(0)
     if rng.random() < 0.5:
         xyz[:, 0] = -xyz[:, 0]
@@ -87,26 +79,6 @@ def augment(scene: Scene, cfg: AugmentConfig, rng: np.random.Generator) -> Scene
         color += rng.uniform(-cfg.color_jitter, cfg.color_jitter) * 255
     return Scene(coord=xyz.astype(np.float32), color=np.clip(color, 0, 255).astype(np.uint8),
                  instance=scene.instance[rows])
-
-
-def elastic_warp(xyz: np.ndarray, spacing: float, sigma: float, rng: np.random.Generator) -> np.ndarray:
-    """``xyz`` moved by a smooth random displacement field: Gaussian noise on a grid of ``spacing``
-    metres, smoothed over one grid cell (scipy's Gaussian filter) and rescaled so that the displacement
-    has standard deviation ``sigma`` metres per axis, interpolated trilinearly at every point. The
-    elastic augmentation of the grouping methods and of DODA's sim-to-real recipe
-    (``segmenter-facts.md``), written with scipy: nearby points move together, so a surface bends
-    without tearing, and the offset targets are computed after the warp."""
-    if sigma <= 0 or len(xyz) == 0:
-        return xyz
-    lo = xyz.min(0) - 2 * spacing
-    shape = np.ceil((xyz.max(0) + 2 * spacing - lo) / spacing).astype(int) + 1
-    axes = tuple(lo[a] + spacing * np.arange(shape[a]) for a in range(3))
-    fields = []
-    for _ in range(3):  # one field per axis
-        field = gaussian_filter(rng.standard_normal(tuple(shape)), sigma=1.0, mode="wrap")
-        fields.append(field * (sigma / max(float(field.std()), 1e-12)))
-    # one interpolation of the three fields at once: the cell lookup is shared
-    return xyz + RegularGridInterpolator(axes, np.stack(fields, axis=-1))(xyz)
 
 
 def targets(vox: Voxels) -> tuple[np.ndarray, np.ndarray]:

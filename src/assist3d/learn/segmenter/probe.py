@@ -228,8 +228,8 @@ def _check_request(out: Path, req: ProbeRequest) -> None:
         missing = [(sec, key) for sec, key in BEFORE_ADDED
                    if isinstance(stored, dict) and isinstance(stored.get(sec), dict) and key not in stored[sec]]
         legacy = bool(missing)
-        if legacy:  # started before these keys existed: it ran with their values of that time
-            old = {**old, "config": legacy_config(old["config"])}
+        if isinstance(stored, dict):  # keys added since with their values of that time, retired ones dropped
+            old = {**old, "config": legacy_config(stored, str(path))}
         old_cmp = {k: v for k, v in old.items() if k != "seeds"}
         new_cmp = {k: v for k, v in mine.items() if k != "seeds"}
         if old_cmp != new_cmp:
