@@ -59,7 +59,7 @@ def test_benchmark_text_format_round_trip(tmp_path):
     scores = np.array([0.25, 0.75, 0.5], np.float32)
     txt = export_scannet_txt(tmp_path, "scene0001_00", masks, scores)
     first = txt.read_text().splitlines()[0].split()
-    assert first[0] == "pred_mask/scene0001_00_000.txt" and first[1] == "1"
+    assert first[0] == "pred_mask/scene0001_00_000.txt" and first[1] == "39"  # an object class the official script scores
     assert (tmp_path / first[0]).read_text().splitlines()[:3] == [str(int(v)) for v in masks[0, :3]]
     m2, s2 = import_scannet_txt(txt, 120)
     assert np.array_equal(m2, masks) and np.allclose(s2, scores)
@@ -172,3 +172,35 @@ def test_workers_give_the_same_result(tmp_path):
     one = evaluate_dataset(ds, pred).to_dict(per_scene=True)
     two = evaluate_dataset(ds, pred, workers=2).to_dict(per_scene=True)
     assert one == two and one["AR50"] == pytest.approx(6 / 9)
+
+
+def test_predictions_round_trip_through_the_benchmark_text_format_and_score_the_same(tmp_path):
+    """convert-predictions --to txt writes a label the ScanNet script scores (39 by default, --label-id N
+    otherwise; 1 was 'wall', which that script drops); back to npz and through our evaluator the figures
+    are those of the original predictions."""
+    from typer.testing import CliRunner
+
+    from assist3d.bench.evaluation.ap import match_scene, summarize
+    from assist3d.bench.evaluation.predictions import SCANNET_INSTANCE_IDS
+    from assist3d.cli import app
+
+    rng = np.random.default_rng(4)
+    gt = np.repeat(np.arange(-1, 5), 150)  # 5 objects of 150 points and 150 void points
+    masks = np.stack([gt == k for k in range(5)] + [rng.random(900) > 0.8])
+    masks[0, :30] = ~masks[0, :30]  # a slightly wrong object
+    scores = np.array([0.9, 0.8, 0.7, 0.6, 0.5, 0.95], np.float32)
+    save_predictions(tmp_path / "npz" / "s.npz", masks, scores)
+    runner = CliRunner()
+    res = runner.invoke(app, ["convert-predictions", str(tmp_path / "npz"), str(tmp_path / "txt"), "--to", "txt"])
+    assert res.exit_code == 0, res.output
+    labels = {line.split()[1] for line in (tmp_path / "txt" / "s.txt").read_text().splitlines()}
+    assert labels == {"39"} and 39 in SCANNET_INSTANCE_IDS
+    res = runner.invoke(app, ["convert-predictions", str(tmp_path / "txt"), str(tmp_path / "back"), "--to", "npz"])
+    assert res.exit_code == 0, res.output
+    m2, s2 = load_predictions(tmp_path / "back" / "s.npz", 900)
+    before = summarize([match_scene(gt, masks, scores, scene_id="s")])
+    after = summarize([match_scene(gt, m2, s2, scene_id="s")])
+    assert before["AP50"] > 0.5 and {k: after[k] for k in ("AP", "AP50", "AP25")} == {k: before[k] for k in ("AP", "AP50", "AP25")}
+    res = runner.invoke(app, ["convert-predictions", str(tmp_path / "npz"), str(tmp_path / "t5"), "--to", "txt",
+                              "--label-id", "5"])
+    assert res.exit_code == 0 and (tmp_path / "t5" / "s.txt").read_text().split()[1] == "5"

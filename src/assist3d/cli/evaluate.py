@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib
 import json
+import logging
 import math
 from pathlib import Path
 from typing import Optional
@@ -15,6 +16,8 @@ from rich.table import Table
 
 from ..core.bounds import MAX_WORKERS
 from ..core.errors import ConfigError, DataError, shown
+
+log = logging.getLogger("assist3d.evaluate")
 
 
 def register(app: typer.Typer) -> None:
@@ -102,13 +105,21 @@ def convert_predictions_cmd(
     src: Path = typer.Argument(..., help="Folder of predictions to convert."),
     dst: Path = typer.Argument(..., help="Output folder."),
     to: str = typer.Option(..., "--to", help="'txt' (ScanNet benchmark text format) or 'npz' (assist3d format)."),
+    label_id: int = typer.Option(39, "--label-id", min=0, max=2**31 - 1,
+                                 help="with --to txt: the class id written with every mask (default 39, "
+                                      "'otherfurniture', an object class the ScanNet benchmark script scores; "
+                                      "1 is 'wall', which it drops)"),
 ) -> None:
     """Convert prediction folders between the assist3d .npz format and the ScanNet benchmark text format."""
     from ..bench.evaluation import convert_predictions
+    from ..bench.evaluation.predictions import SCANNET_INSTANCE_IDS
 
     if to not in ("txt", "npz"):
         raise ConfigError(f"--to {to!r}: expected 'txt' or 'npz'")
     if not src.is_dir():
         raise DataError(f"{shown(src, 400)}: prediction folder not found" + (" (it is a file)" if src.exists() else ""))
-    n = convert_predictions(src, dst, to=to)
-    typer.echo(json.dumps({"scenes": n, "to": to, "out": str(dst)}))
+    if to == "txt" and label_id not in SCANNET_INSTANCE_IDS:
+        log.warning("--label-id %d is not one of the classes the ScanNet benchmark script scores (%s): that "
+                    "script will drop these predictions", label_id, ", ".join(map(str, sorted(SCANNET_INSTANCE_IDS))))
+    n = convert_predictions(src, dst, to=to, label_id=label_id)
+    typer.echo(json.dumps({"scenes": n, "to": to, "out": str(dst), "label_id": label_id if to == "txt" else None}))

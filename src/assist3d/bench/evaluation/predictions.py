@@ -26,6 +26,15 @@ from ...core.paths import inside, safe_name
 
 log = logging.getLogger(__name__)
 
+#: The label id written with every mask in the benchmark text format: 39, "otherfurniture", an object
+#: class of the ScanNet benchmark (its instance evaluation scores the nyu40 ids 3-12, 14, 16, 24, 28, 33,
+#: 34, 36 and 39 and drops every other, so a label such as 1, "wall", makes the official script discard
+#: every prediction). To score class-agnostically with the official script, give every ground-truth
+#: object the same class (``assist3d evaluate`` does this itself).
+DEFAULT_LABEL_ID = 39
+#: The nyu40 ids the ScanNet benchmark's instance evaluation scores.
+SCANNET_INSTANCE_IDS = frozenset({3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 14, 16, 24, 28, 33, 34, 36, 39})
+
 
 def _validated(path: Path, masks: np.ndarray, scores: np.ndarray, n_points: int | None) -> tuple[np.ndarray, np.ndarray]:
     masks = np.asarray(masks)
@@ -74,8 +83,10 @@ def _mask_bytes(mask: np.ndarray) -> bytes:
     return out.tobytes()
 
 
-def export_scannet_txt(out_dir: str | Path, scene_id: str, masks: np.ndarray, scores: np.ndarray, *, label_id: int = 1) -> Path:
-    """Write one scene in the benchmark text format under ``out_dir``; returns the ``.txt`` path."""
+def export_scannet_txt(out_dir: str | Path, scene_id: str, masks: np.ndarray, scores: np.ndarray, *,
+                       label_id: int = DEFAULT_LABEL_ID) -> Path:
+    """Write one scene in the benchmark text format under ``out_dir``, every mask with ``label_id``
+    (:data:`DEFAULT_LABEL_ID`); returns the ``.txt`` path."""
     out_dir = Path(out_dir)
     safe_name(scene_id, what=f"{out_dir}: scene id")
     txt = out_dir / f"{scene_id}.txt"
@@ -139,10 +150,11 @@ def import_scannet_txt(path: str | Path, n_points: int | None = None) -> tuple[n
     return np.stack(masks), np.asarray(scores, np.float32)
 
 
-def convert_predictions(src: str | Path, dst: str | Path, *, to: str) -> int:
+def convert_predictions(src: str | Path, dst: str | Path, *, to: str, label_id: int = DEFAULT_LABEL_ID) -> int:
     """Convert a folder of predictions between ``npz`` and the benchmark ``txt`` format.
 
-    ``to="txt"`` reads every ``*.npz`` in ``src``; ``to="npz"`` every ``*.txt``. Returns the scene count.
+    ``to="txt"`` reads every ``*.npz`` in ``src`` and writes each mask with ``label_id``; ``to="npz"``
+    every ``*.txt`` (label ids are not kept: every mask is an object). Returns the scene count.
     """
     src, dst = Path(src), Path(dst)
     if to not in ("txt", "npz"):
@@ -151,7 +163,7 @@ def convert_predictions(src: str | Path, dst: str | Path, *, to: str) -> int:
     for f in files:
         if to == "txt":
             masks, scores = load_predictions(f)
-            export_scannet_txt(dst, f.stem, masks, scores)
+            export_scannet_txt(dst, f.stem, masks, scores, label_id=label_id)
         else:
             masks, scores = import_scannet_txt(f)
             save_predictions(dst / f"{f.stem}.npz", masks, scores)
