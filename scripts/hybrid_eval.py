@@ -10,11 +10,9 @@ Rows: ``geometric`` and ``geometric+snap`` (no model; the control: the reference
 whose planes are not refit), then per model ``learned``
 (what ``assist3d probe`` scores), ``hybrid`` (what ``assist3d segment`` does by default, with
 ``HYBRID_GEOMETRIC``'s plane refit since 2026-11-28; figures before that date were made without it),
-``hybrid_v1`` (the first hybrid recipe, without the fallback proposals) and ``hybrid+stability``
-(the stability ranking, measured and not adopted; see ``learn/segmenter/hybrid.py``),
-``hybrid+drop_structure`` and ``learned+drop_structure`` (the network's instances linked without the
-voxels on the geometric reference's structural planes; ``HybridConfig.drop_structure``),
-``hybrid+snap_rank`` (proposals ranked by their agreement with the superpoints; ``HybridConfig.snap_rank``). ``--tta``
+``hybrid_v1`` (the first hybrid recipe, without the fallback proposals). The variants measured and not
+adopted (stability ranking, structural planes dropped, superpoint-agreement ranking) have left the code;
+their rows are in the result files of experiments/ made before that. ``--tta``
 adds ``learned+tta`` and ``hybrid+tta``: the same with the network's outputs averaged over 8 copies
 of each scan (4 quarter turns about z, with and without a mirror; ``infer.predict_voxels_tta``).
 AP50 is over the scans of the first --eval spec; each further spec is reported on its own; every
@@ -40,18 +38,14 @@ from assist3d.bench.evaluation.compare import room_means
 from assist3d.core.fileio import write_json_atomic
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.features import voxel_features, voxelize
-from assist3d.learn.segmenter.geometric import segment_geometric, structural_points
-from assist3d.learn.segmenter.hybrid import HYBRID_GEOMETRIC, HybridConfig, combine, structure_voxels, without_structure
+from assist3d.learn.segmenter.geometric import segment_geometric
+from assist3d.learn.segmenter.hybrid import HYBRID_GEOMETRIC, HybridConfig, combine
 from assist3d.learn.segmenter.infer import instances, predict_voxels, predict_voxels_tta
 from assist3d.learn.segmenter.superpoints import snap_masks, superpoints
 
-STABILITY_RADII = (0.05, 0.10)  # the multi-scale radii of docs/fidelity.md's "Inference variants" around 7 cm
 VARIANTS = {
     "hybrid": HybridConfig(),
     "hybrid_v1": HybridConfig(fallback_radius=None),
-    "hybrid+stability": HybridConfig(stability_radii=STABILITY_RADII),
-    "hybrid+drop_structure": HybridConfig(drop_structure=True),
-    "hybrid+snap_rank": HybridConfig(snap_rank=True),
 }
 
 
@@ -71,23 +65,21 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--tta", action="store_true", help="also the rows learned+tta and hybrid+tta")
     ap.add_argument("--refine-planes", type=int, default=None, metavar="N",
-                    help="plane refits of the structural planes and geometric components that the hybrid "
-                         "and drop_structure rows use (default: HYBRID_GEOMETRIC's, today's; 0 reproduces "
-                         "hybrid figures made before 2026-11-28); the control rows never refit")
+                    help="plane refits of the geometric components that the hybrid rows use (default: "
+                         "HYBRID_GEOMETRIC's, today's; 0 reproduces the hybrid figures made before the refit); "
+                         "the control rows never refit")
     a = ap.parse_args()
     hyb_geo = HYBRID_GEOMETRIC if a.refine_planes is None else replace(HYBRID_GEOMETRIC, refine=a.refine_planes)
     torch.set_num_threads(a.threads)
     specs = a.eval or ["array:../shared/data/real/dev", "array:../shared/data/real/scannet_scene0451_01.npy"]
-    # (group, scene_id, sample, hybrid inference's geometric components, superpoints, points on its
-    # structural planes); the control rows score the reference itself (GeometricConfig(), no plane refit)
+    # (group, scene_id, sample, hybrid inference's geometric components, superpoints); the control rows
+    # score the reference itself (GeometricConfig(), no plane refit)
     scans, reference = [], []
     for g, spec in enumerate(specs):
         ds = open_dataset(spec)
         for sid in ds.scene_ids:
             s = ds.load(sid)
-            on_plane = structural_points(s.coord, hyb_geo)
-            scans.append((g, sid, s, segment_geometric(s.coord, hyb_geo, on_plane), superpoints(s.coord),
-                          on_plane))
+            scans.append((g, sid, s, segment_geometric(s.coord, hyb_geo), superpoints(s.coord)))
             reference.append(segment_geometric(s.coord))
             print("prepared", sid, flush=True)
 
@@ -100,7 +92,7 @@ def main() -> None:
     result: dict = {"eval": specs, "hybrid_geometric": asdict(hyb_geo), "control": {}, "models": {}}
     result["control"]["geometric"] = score([(geo.masks, geo.scores) for geo in reference])
     result["control"]["geometric+snap"] = score([(snap_masks(geo.masks, segs), geo.scores)
-                                                 for geo, (*_, segs, _) in zip(reference, scans)])
+                                                 for geo, (*_, segs) in zip(reference, scans)])
     for path in a.models:
         t0 = time.perf_counter()
         members = [load_segmenter(p) for p in path.split(",")]
@@ -108,21 +100,17 @@ def main() -> None:
         if any(m.config.net.voxel_size != cfg.net.voxel_size for m in members):
             raise SystemExit(f"{path}: ensemble members must share the voxel size")
         learned: list = []
-        learned_nostruct: list = []
         hybrid: dict[str, list] = {name: [] for name in VARIANTS}
         tta: dict[str, list] = {"learned+tta": [], "hybrid+tta": []}
-        for _, _, s, geo, segs, on_plane in scans:
+        for _, _, s, geo, segs in scans:
             vox = voxelize(s.coord.astype(np.float32), cfg.net.voxel_size, s.color)
             outs = [predict_voxels(m.model, vox.coords, voxel_features(vox, use_color=m.config.net.use_color))
                     for m in members]
             fg, off = np.mean([o[0] for o in outs], 0), np.mean([o[1] for o in outs], 0)
             inst = instances(vox, fg, off, cfg.cluster)
             learned.append((inst.masks, inst.scores))
-            structure = structure_voxels(vox, on_plane)
-            drop = instances(vox, without_structure(fg, structure), off, cfg.cluster)
-            learned_nostruct.append((drop.masks, drop.scores))
             for name, variant in VARIANTS.items():
-                h = combine(inst, vox, fg, off, cfg.cluster, geo.masks, segs, hybrid=variant, structure=structure)
+                h = combine(inst, vox, fg, off, cfg.cluster, geo.masks, segs, hybrid=variant)
                 hybrid[name].append((h.masks, h.scores))
             if a.tta:
                 outs = [predict_voxels_tta(m.model, m.config, s.coord, s.color, vox) for m in members]
@@ -132,8 +120,7 @@ def main() -> None:
                 h = combine(inst, vox, fg, off, cfg.cluster, geo.masks, segs)
                 tta["hybrid+tta"].append((h.masks, h.scores))
         rows = hybrid | (tta if a.tta else {})
-        result["models"][path] = ({"learned": score(learned), "learned+drop_structure": score(learned_nostruct)}
-                                  | {name: score(p) for name, p in rows.items()})
+        result["models"][path] = {"learned": score(learned)} | {name: score(p) for name, p in rows.items()}
         r = result["models"][path]
         ap50 = {k: " / ".join(f"{x['AP50']:.3f}" for x in v) for k, v in r.items()}
         print(f"{path}: AP50 " + ", ".join(f"{k} {v}" for k, v in ap50.items()) + f" ({time.perf_counter() - t0:.0f} s)",

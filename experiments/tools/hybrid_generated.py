@@ -1,5 +1,5 @@
 """Hybrid inference variants on held-out generated scenes (docs/fidelity.md, "Fallback proposals"):
-how the fallback proposals and the stability ranking do where the network is in its own domain.
+how the fallback proposals do where the network is in its own domain (the stability ranking it also scored has left the code).
 
     python experiments/tools/hybrid_generated.py MODEL.pt [MODEL.pt ...] --data assist3d:HELD_OUT [--scenes 60]
         [--out generated.json]
@@ -9,7 +9,7 @@ seed 1: ``assist3d generate --num-scenes 180 --seed 1 --preset assist3d``). Scen
 ~2.5 points per occupied 5 cm voxel like the real scans (seeded by the scene id, as in
 ``experiments/tools/proposal_scorer.py``); every generated instance counts as an object. Rows per model:
 ``learned`` (the network's instances), ``hybrid_v1`` (the first hybrid recipe), ``hybrid`` (the
-default of ``assist3d segment``) and ``hybrid+stability``; AP, AP50, AP25 and AR over the scenes.
+default of ``assist3d segment``); AP, AP50, AP25 and AR over the scenes.
 """
 
 from __future__ import annotations
@@ -34,7 +34,6 @@ from assist3d.learn.segmenter.superpoints import superpoints
 VARIANTS = {
     "hybrid_v1": HybridConfig(fallback_radius=None),
     "hybrid": HybridConfig(),
-    "hybrid+stability": HybridConfig(stability_radii=(0.05, 0.10)),
 }
 
 

@@ -20,8 +20,6 @@ from assist3d.learn.segmenter.hybrid import (  # noqa: E402
     combine,
     labels_from_masks,
     segment_hybrid,
-    snap_agreement,
-    structure_voxels,
 )
 from assist3d.learn.segmenter.infer import instances  # noqa: E402
 from assist3d.learn.segmenter.model import Segmenter  # noqa: E402
@@ -184,74 +182,6 @@ def test_fallback_proposals_split_touching_objects_below_the_first_proposals():
     assert m[0]["AP50"] == 0.0 < m[1]["AP50"]  # 1/3: the merge, a false positive, still ranks first
 
 
-def test_snap_rank_puts_a_fragment_that_cuts_a_superpoint_below_a_whole_object():
-    # two 30 cm blocks, each one superpoint; proposals: 60 % of block 1 (a fragment, the network's
-    # foreground higher there) and the whole block 0; no learned instance (foreground below 0.5)
-    cells = np.stack(np.meshgrid(np.arange(6), np.arange(6), np.arange(6), indexing="ij"), -1).reshape(-1, 3)
-    coord = np.concatenate([cells, cells + [8, 0, 0]]) * 0.05 + 0.025
-    segments = np.repeat([0, 1], len(cells))
-    block0, block1 = segments == 0, segments == 1
-    fragment = block1 & (np.arange(len(coord)) < len(cells) + int(0.6 * len(cells)))  # a slab of block 1
-    sliver = block1 & (np.arange(len(coord)) < len(cells) + int(0.4 * len(cells)))
-    agreement = snap_agreement(np.stack([fragment, block0, block0 & False, sliver]), segments)
-    # the known gap: a mask that covers no superpoint by more than half keeps its points, agreement 1
-    assert agreement == pytest.approx([fragment.sum() / block1.sum(), 1.0, 0.0, 1.0])
-    vox = voxelize(coord, 0.05)
-    fg = np.zeros(len(vox), np.float32)
-    fg[vox.inverse] = np.where(segments == 1, 0.45, 0.40)  # one point per voxel
-    offset = np.zeros((len(vox), 3), np.float32)
-    cluster = ClusterConfig()
-    learned = instances(vox, fg, offset, cluster)
-    assert len(learned.masks) == 0
-    components = np.stack([fragment, block0])
-    plain = combine(learned, vox, fg, offset, cluster, components, segments)
-    ranked = combine(learned, vox, fg, offset, cluster, components, segments, hybrid=HybridConfig(snap_rank=True))
-    # both keep the two objects, snapped (the fragment grows to its whole block); only the order moves
-    assert np.array_equal(plain.masks[0], block1) and np.array_equal(plain.masks[1], block0)
-    assert np.array_equal(ranked.masks[0], block0) and np.array_equal(ranked.masks[1], block1)
-    assert ranked.scores[1] == pytest.approx((1 + 0.45 * 0.6) / 2, abs=0.01) and ranked.scores[1] < ranked.scores[0]
-
-
-def test_structure_voxels_take_the_majority_of_their_points():
-    coord = np.array([[0.01, 0.01, 0.01], [0.02, 0.02, 0.02], [0.03, 0.03, 0.03],  # voxel A: 2 of 3 on a plane
-                      [0.11, 0.01, 0.01], [0.12, 0.02, 0.02], [0.13, 0.03, 0.03],  # voxel B: 1 of 3
-                      [0.21, 0.01, 0.01], [0.22, 0.02, 0.02]])  # voxel C: 1 of 2 (not more than half)
-    vox = voxelize(coord, 0.1)
-    on_plane = np.array([1, 1, 0, 1, 0, 0, 1, 0], bool)
-    structure = structure_voxels(vox, on_plane)
-    per_point = structure[vox.inverse]
-    assert per_point.tolist() == [True] * 3 + [False] * 5
-
-
-def test_drop_structure_links_objects_apart_that_a_wall_called_object_joins():
-    # two 20 cm blocks 60 cm apart joined by a row of wall voxels that the network calls object; all
-    # offsets zero, so at a 7 cm link radius the three form one instance
-    block = np.stack(np.meshgrid(np.arange(4), np.arange(4), np.arange(4), indexing="ij"), -1).reshape(-1, 3)
-    wall = np.stack([np.arange(4, 12), np.zeros(8, int), np.zeros(8, int)], 1)
-    cells = np.concatenate([block, wall, block + [12, 0, 0]])
-    coord = cells * 0.05 + 0.025
-    truth = np.concatenate([np.zeros(len(block)), np.full(len(wall), -1), np.ones(len(block))]).astype(np.int64)
-    vox = voxelize(coord, 0.05)
-    fg = np.full(len(vox), 0.9, np.float32)
-    offset = np.zeros((len(vox), 3))
-    on_wall = np.zeros(len(vox), bool)
-    on_wall[vox.inverse[truth == -1]] = True
-    cluster = ClusterConfig()
-    learned = instances(vox, fg, offset, cluster)
-    none = np.zeros((0, len(coord)), bool)
-    own = np.arange(len(coord))
-    default = combine(learned, vox, fg, offset, cluster, none, own, hybrid=HybridConfig(fallback_radius=None))
-    dropped = combine(learned, vox, fg, offset, cluster, none, own, structure=on_wall,
-                      hybrid=HybridConfig(fallback_radius=None, drop_structure=True))
-    assert len(default.masks) == 1 and default.masks[0].all()
-    assert len(dropped.masks) == 2 and not dropped.masks[:, truth == -1].any()
-    assert sorted(set(truth[m]) for m in dropped.masks) == [{0}, {1}]
-    # the learned instances' scores come from the same foreground: equal blocks score the same
-    assert dropped.scores[0] == pytest.approx(dropped.scores[1])
-    with pytest.raises(ValueError, match="structure"):
-        combine(learned, vox, fg, offset, cluster, none, own, hybrid=HybridConfig(drop_structure=True))
-
-
 @pytest.mark.slow
 def test_geometric_with_given_planes_equals_finding_them_and_checks_their_shape(room):
     on_plane = structural_points(room.coord)
@@ -274,9 +204,9 @@ def test_hybrid_on_a_toy_room_returns_ranked_consistent_masks_and_finds_the_boxe
     assert seg.masks[seg.labels[held], np.flatnonzero(held)].all() and not seg.masks[:, ~held].any()
     m = summarize([match_scene(room.instance, seg.masks, seg.scores, valid=room.valid)])
     assert m["AR"] > 0.7, m.summary  # every box is among the proposals
-    dropped = segment_hybrid(model, cfg, room.coord, room.color, hybrid=HybridConfig(drop_structure=True))
-    assert (np.diff(dropped.scores) <= 0).all()
-    assert summarize([match_scene(room.instance, dropped.masks, dropped.scores, valid=room.valid)])["AR"] > 0.7
+    first = segment_hybrid(model, cfg, room.coord, room.color, hybrid=HybridConfig(fallback_radius=None))
+    assert (np.diff(first.scores) <= 0).all()
+    assert summarize([match_scene(room.instance, first.masks, first.scores, valid=room.valid)])["AR"] > 0.7
 
 
 @pytest.mark.slow

@@ -571,9 +571,10 @@ def test_probe_hybrid_scores_segment_default_and_is_added_to_a_finished_folder(t
     assert "mean ± std hybrid" in table and "1 hybrid" in table
     assert (out / "seed_1" / "pred_hybrid" / f"{ds.scene_ids[0]}.npz").stat().st_mtime_ns == pred_stamp
     # figures written before an option existed (its key missing) stay valid: options keep the old
-    # behaviour by default
+    # behaviour by default; so do figures that stored a since retired option switched off
     res = json.loads((out / "seed_1" / "result.json").read_text())
-    del res["hybrid"]["inference"]["hybrid"]["snap_rank"]
+    del res["hybrid"]["inference"]["hybrid"]["nms_iou"]
+    res["hybrid"]["inference"]["hybrid"]["snap_rank"] = False
     (out / "seed_1" / "result.json").write_text(json.dumps(res))
     assert probe("--seeds", "2", "--json", "--hybrid")["hybrid"]["mean"] == h["mean"]
     assert (out / "seed_1" / "pred_hybrid" / f"{ds.scene_ids[0]}.npz").stat().st_mtime_ns == pred_stamp
@@ -593,7 +594,8 @@ def test_probe_hybrid_scores_segment_default_and_is_added_to_a_finished_folder(t
 def test_hybrid_figures_made_before_the_plane_refit_are_not_current():
     """Settings stored before an option was recorded take the value it had then: hybrid figures
     stored without ``geometric.refine`` were made without the refit, so they are recomputed, while
-    a missing option whose default never changed (``snap_rank``) keeps figures valid."""
+    a missing option whose default never changed (``nms_iou``) keeps figures valid; a retired option
+    (``snap_rank``) keeps them valid when it was off and makes them stale when it was on."""
     from assist3d.learn.segmenter.probe import _current, hybrid_settings
 
     today = hybrid_settings()
@@ -602,8 +604,12 @@ def test_hybrid_figures_made_before_the_plane_refit_are_not_current():
     del old["geometric"]["refine"]
     assert not _current(old)
     old["geometric"]["refine"] = 2
-    del old["hybrid"]["snap_rank"]
+    del old["hybrid"]["nms_iou"]
     assert _current(old)
+    old["hybrid"].update({"snap_rank": False, "stability_radii": [], "drop_structure": False})
+    assert _current(old)
+    old["hybrid"]["snap_rank"] = True
+    assert not _current(old)
 
 
 def _room_with_boxes() -> object:

@@ -23,18 +23,9 @@ are in docs/fidelity.md ("Hybrid inference", "Fallback proposals"). ``assist3d p
 proposals alone (it measures training data, and the geometric proposals do not depend on it); ``probe
 --hybrid`` scores this recipe too.
 
-Three variants were measured and not adopted; each is off by default and kept for the experiments that
-measured it (docs/fidelity.md says what each did):
-
-* ``HybridConfig.stability_radii`` multiplies the scores of steps 1-2 by ``0.5 + 0.5 x stability``, the
-  mean over those radii of each proposal's best IoU with the network's instances linked at that radius
-  (a persistence criterion, as in MSER or HDBSCAN);
-* ``HybridConfig.drop_structure`` links the network's instances of steps 1 and 3 without the 5 cm voxels
-  that lie on the room's structural planes (more than half of their points on a plane of the geometric
-  reference); the proposals' scores are unchanged;
-* ``HybridConfig.snap_rank`` multiplies the scores of steps 1-3 by each proposal's agreement with the
-  superpoints (the point IoU between the proposal and its snapped version, :func:`snap_agreement`) before
-  the tiers are formed: a fragment cuts through surface patches, a whole object is a union of them.
+Three variants were measured and not adopted, and have left the code (a stability ranking, instances
+linked without the structural planes' voxels, ranking by agreement with the superpoints); docs/fidelity.md
+and their experiment folders keep what they did.
 
 Masks may overlap (a component can hold two learned instances without an IoU above 0.5 with
 either); ``labels`` gives each point the best-scoring mask that holds it.
@@ -46,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cluster import instance_score, mask_nms, pairwise_iou
+from .cluster import instance_score, mask_nms
 from .config import ClusterConfig, SegmenterConfig
 from .features import Voxels, voxelize
 from .geometric import GeometricConfig, segment_geometric, structural_points
@@ -67,28 +58,10 @@ HYBRID_GEOMETRIC = GeometricConfig(refine=2)
 class HybridConfig:
     """``fallback_radius`` (metres; None: no fallback proposals) is step 3 of the module docstring;
     ``fallback_radius=None`` gives the first hybrid recipe (network and geometric proposals, NMS,
-    snapping). ``stability_radii`` (metres, e.g. ``(0.05, 0.10)``), ``drop_structure`` and
-    ``snap_rank`` turn on variants that were measured and not adopted (module docstring)."""
+    snapping)."""
 
-    stability_radii: tuple[float, ...] = ()
     fallback_radius: float | None = 0.05
     nms_iou: float = NMS_IOU
-    drop_structure: bool = False
-    snap_rank: bool = False
-
-
-def structure_voxels(vox: Voxels, on_plane: np.ndarray) -> np.ndarray:
-    """(V,) bool: the voxels of ``vox`` with more than half of their points on a structural plane
-    (``on_plane`` (N,) bool per point, from :func:`geometric.structural_points`)."""
-    n = len(vox)
-    on = np.bincount(vox.inverse, np.asarray(on_plane, np.float64), n)
-    return on > 0.5 * np.bincount(vox.inverse, minlength=n)
-
-
-def without_structure(fg: np.ndarray, structure: np.ndarray) -> np.ndarray:
-    """The foreground probability ``fg`` (V,) with the ``structure`` voxels (V,) bool set to 0, so that
-    no instance is linked through them (``HybridConfig.drop_structure``)."""
-    return np.where(structure, 0.0, fg).astype(fg.dtype)
 
 
 def labels_from_masks(masks: np.ndarray) -> np.ndarray:
@@ -118,74 +91,23 @@ def network_score(masks: np.ndarray, vox: Voxels, fg: np.ndarray) -> np.ndarray:
     return instance_score(mean_fg, n_vox)
 
 
-def snap_agreement(masks: np.ndarray, segments: np.ndarray, min_cover: float = SuperpointConfig.min_cover) -> np.ndarray:
-    """(M,) in [0, 1]: the point IoU of each mask of ``masks`` (M, N) bool with its snapped version
-    (:func:`superpoints.snap_masks` with the superpoint id (N,) of every point); 1 for a union of
-    superpoints, lower the more of a superpoint a mask takes without taking most of it. A mask that
-    covers no superpoint by more than ``min_cover`` keeps its points when snapped, so it scores 1 too
-    (a sliver across several patches is not demoted): measured as registered, a known gap."""
-    if len(masks) == 0:
-        return np.zeros(0)
-    return _row_iou(masks, snap_masks(masks, segments, min_cover))
-
-
-def _row_iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(M,) the point IoU of row k of ``a`` with row k of ``b`` (both (M, N) bool; 0 for two empty rows)."""
-    inter = (a & b).sum(1)
-    union = (a | b).sum(1)
-    return np.where(union > 0, inter / np.maximum(union, 1), 0.0)
-
-
-def best_iou(masks: np.ndarray, others: np.ndarray) -> np.ndarray:
-    """(M,) the highest IoU of each of ``masks`` (M, N) bool with one of ``others`` (K, N) bool (0 if K = 0)."""
-    if len(masks) == 0 or len(others) == 0:
-        return np.zeros(len(masks))
-    return pairwise_iou(masks, others).max(1)
-
-
-def stability(masks: np.ndarray, vox: Voxels, fg: np.ndarray, offset: np.ndarray, cluster: ClusterConfig,
-              radii: tuple[float, ...]) -> np.ndarray:
-    """(M,) in [0, 1], the mean over ``radii`` of each mask's best IoU with the network's
-    instances linked at that radius (1 when ``radii`` is empty)."""
-    if not radii:
-        return np.ones(len(masks))
-    alt = [instances(vox, fg, offset, cluster.model_copy(update={"radius": r})).masks for r in radii]
-    return np.mean([best_iou(masks, a) for a in alt], axis=0)
-
-
 def combine(learned: Segmentation, vox: Voxels, fg: np.ndarray, offset: np.ndarray, cluster: ClusterConfig,
             components: np.ndarray, segments: np.ndarray, min_cover: float = SuperpointConfig.min_cover,
-            hybrid: HybridConfig = HybridConfig(), structure: np.ndarray | None = None) -> Segmentation:
+            hybrid: HybridConfig = HybridConfig()) -> Segmentation:
     """Steps 2-5: the network's instances ``learned`` (from :func:`infer.instances` on ``vox`` with
     ``cluster``), its foreground probability ``fg`` (V,) and offsets ``offset`` (V, 3), the geometric
-    components (C, N) bool and the superpoint id (N,) of every point. With ``hybrid.drop_structure``,
-    ``structure`` (V,) bool (:func:`structure_voxels`) is required and the network's instances are
-    linked again without those voxels, in place of ``learned``."""
-    link_fg = fg
-    if hybrid.drop_structure:
-        if structure is None or np.shape(structure) != (len(vox),):
-            raise ValueError(f"drop_structure needs structure of shape ({len(vox)},), got "
-                             f"{None if structure is None else np.shape(structure)}")
-        link_fg = without_structure(fg, structure)
-        learned = instances(vox, link_fg, offset, cluster)
+    components (C, N) bool and the superpoint id (N,) of every point."""
     masks, scores = proposals(learned, vox, fg, components)
-    if hybrid.stability_radii:
-        scores = scores * (0.5 + 0.5 * stability(masks, vox, link_fg, offset, cluster, hybrid.stability_radii))
     first = len(masks)
     if hybrid.fallback_radius is not None:
-        extra = instances(vox, link_fg, offset, cluster.model_copy(update={"radius": hybrid.fallback_radius}))
+        extra = instances(vox, fg, offset, cluster.model_copy(update={"radius": hybrid.fallback_radius}))
         masks = np.concatenate([masks, extra.masks])
         scores = np.concatenate([scores, extra.scores.astype(np.float64)])
-    # snap_rank snaps every proposal to score it, and the kept ones reuse those masks (snapping is row by row)
-    snapped = snap_masks(masks, segments, min_cover) if hybrid.snap_rank and len(masks) else None
-    if snapped is not None:
-        scores = scores * _row_iou(masks, snapped)
-    if hybrid.fallback_radius is not None:
         scores = np.concatenate([(1.0 + scores[:first]) / 2.0, scores[first:] / 2.0])
     keep = mask_nms(masks, scores, hybrid.nms_iou)
     masks, scores = masks[keep], scores[keep]
     if len(masks):
-        masks = snapped[keep] if snapped is not None else snap_masks(masks, segments, min_cover)
+        masks = snap_masks(masks, segments, min_cover)
     return Segmentation(masks=masks, scores=scores.astype(np.float32), labels=labels_from_masks(masks))
 
 
@@ -201,7 +123,6 @@ def segment_hybrid(model: Network, cfg: SegmenterConfig, coord: np.ndarray, colo
     vox = voxelize(coord, cfg.net.voxel_size, color)
     fg, offset = predict_scan(model, cfg, coord, color, vox, tta=tta, device=device)
     on_plane = structural_points(coord, geometric)
-    structure = structure_voxels(vox, on_plane) if hybrid.drop_structure else None
     return combine(instances(vox, fg, offset, cfg.cluster), vox, fg, offset, cfg.cluster,
                    segment_geometric(coord, geometric, on_plane).masks, superpoints(coord, superpoint),
-                   superpoint.min_cover, hybrid, structure)
+                   superpoint.min_cover, hybrid)

@@ -78,13 +78,35 @@ def hybrid_settings() -> dict:
 SETTINGS_BEFORE_RECORDED: dict[str, dict] = {"geometric": {"refine": 0}}
 
 
+#: Options of hybrid inference that were measured, not adopted and taken out, with the value that meant
+#: "off": figures stored with them off are today's, figures made with one on are not.
+SETTINGS_RETIRED: dict[str, dict] = {"hybrid": {"stability_radii": [], "drop_structure": False, "snap_rank": False}}
+
+
+def _without_retired(stored: dict) -> dict | None:
+    """``stored`` without the :data:`SETTINGS_RETIRED` options it holds switched off; None if one was on."""
+    out = dict(stored)
+    for section, off in SETTINGS_RETIRED.items():
+        part = out.get(section)
+        if not isinstance(part, dict):
+            continue
+        if any(k in part and part[k] != v for k, v in off.items()):
+            return None
+        out[section] = {k: v for k, v in part.items() if k not in off}
+    return out
+
+
 def _current(stored: object) -> bool:
     """Whether hybrid figures made with the ``stored`` settings are today's. A setting missing from
     ``stored`` takes the value it had before it was recorded (``SETTINGS_BEFORE_RECORDED``), else
     today's default: options are added with defaults that keep the old behaviour, so figures written
-    before an option existed stay valid, unless the option's default then changed."""
+    before an option existed stay valid, unless the option's default then changed. Retired options
+    (``SETTINGS_RETIRED``) count only when they were on."""
     today = hybrid_settings()
-    if not isinstance(stored, dict) or set(stored) - set(today):
+    if not isinstance(stored, dict):
+        return False
+    stored = _without_retired(stored)
+    if stored is None or set(stored) - set(today):
         return False
     return all(isinstance(stored.get(k, {}), dict)
                and {**v, **SETTINGS_BEFORE_RECORDED.get(k, {}), **stored.get(k, {})} == v for k, v in today.items())
