@@ -15,7 +15,7 @@ import pytest
 
 from assist3d.bench.data import open_dataset
 from assist3d.bench.data.ply import write_ply
-from assist3d.core.errors import DataError
+from assist3d.core.errors import ConfigError, DataError
 
 
 class _Collect(logging.Handler):
@@ -315,3 +315,37 @@ def test_mesh_import_skips_cut_and_dangling_objs_and_warns_on_unterminated_ones(
     assert report.total == 3
     warned = [m for m in msgs if "does not end with a newline" in m]
     assert len(warned) == 1 and "unterminated.obj" in warned[0] and "f 1 5 7 3" in warned[0], msgs
+
+
+# ---------------------------------------------------------------------------- encodings and nesting
+
+
+def test_configs_in_another_encoding_or_nested_deeply_are_one_line_each(tmp_path):
+    """A config that is not UTF-8 (a binary file passed by mistake, a Latin-1 editor save) or nested a few
+    thousand levels, and a dataset manifest nested as deeply, end in one line naming the file (they were
+    UnicodeDecodeError and RecursionError tracebacks)."""
+    from typer.testing import CliRunner
+
+    from assist3d.cli import app
+
+    runner = CliRunner()
+    latin = tmp_path / "latin.yaml"
+    latin.write_bytes("room:\n  name: caf\xe9\n".encode("latin-1"))
+    binary = tmp_path / "binary.yaml"
+    binary.write_bytes(bytes(range(256)) * 4)
+    deep = tmp_path / "deep.yaml"
+    deep.write_text("a: " + "[" * 5000 + "]" * 5000 + "\n")
+    for cfg, what in ((latin, "not UTF-8"), (binary, "not UTF-8"), (deep, "nested too deeply")):
+        for args in (["generate", "--out", str(tmp_path / "out"), "--num-scenes", "1", "--config", str(cfg)],
+                     ["bench-train", "--data", "assist3d:nowhere", "--config", str(cfg)]):
+            res = runner.invoke(app, args)
+            said = str(res.exception) + res.output  # the command line prints an AssistError as one line
+            assert res.exit_code != 0 and isinstance(res.exception, ConfigError), (args, said)
+            assert str(cfg) in said and what in said and "\n" not in str(res.exception), said
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "manifest.json").write_text('{"a": ' + "[" * 100_000 + "]" * 100_000 + "}")
+    from assist3d.export.manifest import read_manifest  # what `metrics` and the assist3d reader use
+
+    with pytest.raises(DataError, match=r"manifest\.json: unreadable manifest \(nested too deeply\)"):
+        read_manifest(data)

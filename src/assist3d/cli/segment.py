@@ -11,11 +11,11 @@ from typing import Optional
 
 import numpy as np
 import typer
-import yaml
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from ..config.files import read_yaml_mapping
 from ..core.errors import ConfigError, shown
 
 log = logging.getLogger("assist3d.segment")
@@ -36,15 +36,7 @@ def _segmenter_config(config: Optional[Path]) -> dict:
     """The mapping of a ``--config`` YAML file ({} without one); one clear line when it is not one."""
     if config is None:
         return {}
-    if not config.is_file():
-        raise ConfigError(f"--config {config}: file not found")
-    try:
-        data = yaml.safe_load(config.read_text()) or {}
-    except yaml.YAMLError as e:
-        raise ConfigError(f"--config {config}: not valid YAML ({e})") from None
-    if not isinstance(data, dict):
-        raise ConfigError(f"--config {config}: expected a mapping at the top level")
-    return data
+    return read_yaml_mapping(config, missing="--config: file not found")
 
 
 def bench_train_cmd(

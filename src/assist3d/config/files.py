@@ -67,6 +67,13 @@ def read_yaml_mapping(path: str | Path, *, missing: str = "config file not found
         loaded = yaml.safe_load(p.read_text(encoding="utf-8"))
     except yaml.YAMLError as e:
         raise ConfigError(f"{p}: not valid YAML ({e})") from None
+    except UnicodeDecodeError as e:
+        raise ConfigError(f"{p}: not UTF-8 text (byte {e.start} is {e.object[e.start:e.start + 1]!r}); "
+                          "save the config as UTF-8 YAML") from None
+    except RecursionError:
+        raise ConfigError(f"{p}: nested too deeply to be a configuration") from None
+    except OSError as e:
+        raise ConfigError(f"{p}: cannot read ({e.strerror or e})") from None
     if loaded is not None and not isinstance(loaded, dict):
         raise ConfigError(f"{p}: expected a mapping at the top level, got {type(loaded).__name__}")
     return loaded or {}

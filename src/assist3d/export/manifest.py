@@ -34,6 +34,8 @@ def read_manifest(root: str | Path, *, fix: str = "") -> dict | None:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError) as e:
         raise DataError(f"{path}: unreadable manifest ({e}){fix}") from None
+    except RecursionError:
+        raise DataError(f"{path}: unreadable manifest (nested too deeply){fix}") from None
     if not isinstance(data, dict):
         raise DataError(f"{path}: unreadable manifest (expected a JSON object, got {type(data).__name__}){fix}")
     return data
