@@ -86,11 +86,11 @@ BEFORE_ADDED: dict[tuple[str, str], Any] = {("optim", "ema_decay"): 0.0,  # no w
 
 # Options measured and not adopted, taken out of the schema: (section, key) -> the values that mean "off"
 # (None: any value, for a setting that only mattered when another was on). A stored configuration holding one
-# of them "off" reads as today's; one that was on was trained with a recipe this version no longer runs. The
-# folders of experiments/ that measured them say what they did.
+# of them "off" reads as today's; one that was on was trained with a recipe this version no longer runs
+# (docs/fidelity.md names what each did and where it was measured).
 RETIRED: dict[tuple[str, str], tuple[Any, ...] | None] = {
-    ("augment", "elastic"): ((), []),  # smooth random warps: experiments/elastic-2026-11-26
-    ("augment", "top_cut_p"): (0, 0.0),  # removing everything above a random height: experiments/topcut-2026-11-27
+    ("augment", "elastic"): ((), []),  # smooth random warps
+    ("augment", "top_cut_p"): (0, 0.0),  # removing everything above a random height
     ("augment", "top_cut_range"): None,
 }
 
