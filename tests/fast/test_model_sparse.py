@@ -212,9 +212,9 @@ def test_neighbour_table_dense_grid_equals_sorted_search(monkeypatch):
     coords = _random_sites(gen, 3, 10, 500)
     coords[:, 1:] -= 4  # negative coordinates too
     cset = sp.CoordSet.build(coords)
-    dense = sp._neighbour_table(coords, 3, cset)
+    dense = sp._neighbour_table(cset, 3)
     monkeypatch.setattr(sp, "DENSE_GRID_CELLS", 0)
-    searched = sp._neighbour_table(coords, 3, cset)
+    searched = sp._neighbour_table(sp.CoordSet.build(coords), 3)
     assert torch.equal(dense, searched)
     # the centre offset is the site itself; a neighbour in another scene is never returned
     assert torch.equal(dense[:, 13], torch.arange(500))

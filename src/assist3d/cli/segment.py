@@ -220,14 +220,6 @@ def segment_cmd(
     """Segment object instances in a scan (class-agnostic), with no GPU and no download."""
     from ..learn.segmenter.features import UNITS, UP_AXES
 
-    if method not in ("hybrid", "learned", "geometric"):
-        raise ConfigError(f"--method {method!r}: expected 'hybrid', 'learned' or 'geometric'")
-    if method == "geometric" and checkpoint:
-        raise ConfigError("--checkpoint is for --method hybrid or learned; the geometric reference has no weights")
-    if method == "geometric" and tta:
-        raise ConfigError("--tta is for --method hybrid or learned; the geometric reference has no network to average")
-    if out.exists() and not out.is_dir():
-        raise ConfigError(f"--out {out}: exists and is not a folder")
     if up_axis not in UP_AXES:
         raise ConfigError(f"--up-axis {up_axis!r}: expected one of {', '.join(UP_AXES)}")
     if units not in UNITS:

@@ -172,7 +172,7 @@ class CoordSet:
         bounding boxes are small enough (:data:`DENSE_GRID_CELLS`), else by the sorted-key search."""
         key = ("table", kernel_size)
         if key not in self.cache:
-            self.cache[key] = _neighbour_table(self.coords, kernel_size, self)
+            self.cache[key] = _neighbour_table(self, kernel_size)
         return self.cache[key]
 
     def children(self) -> tuple[torch.Tensor, torch.Tensor]:
@@ -223,28 +223,31 @@ class CoordSet:
 DENSE_GRID_CELLS = 32_000_000  # 128 MB of int32
 
 
-def _neighbour_table(coords: torch.Tensor, kernel_size: int, cset: "CoordSet") -> torch.Tensor:
+def _neighbour_table(cset: "CoordSet", kernel_size: int) -> torch.Tensor:
+    coords = cset.coords
     n = coords.shape[0]
     offs = kernel_offsets(kernel_size, coords.device)
-    c = coords.to(torch.int64)
     if n == 0:
         return torch.zeros((0, len(offs)), dtype=torch.int64, device=coords.device)
+    c = coords.to(torch.int64)
     r = kernel_size // 2
     lo = c[:, 1:].amin(0) - r
     ext = c[:, 1:].amax(0) + r + 1 - lo
-    nb = int(c[:, 0].max()) + 1
-    cells = nb * int(ext.prod())
-    if cells <= DENSE_GRID_CELLS:
-        # a dense grid of row indices (n = empty), padded by the kernel radius: every query is in range
-        strides = torch.stack([ext[1] * ext[2], ext[2], torch.ones_like(ext[2])])
-        grid = torch.full((cells,), n, dtype=torch.int32, device=coords.device)
-        flat = c[:, 0] * int(ext.prod()) + ((c[:, 1:] - lo) * strides).sum(1)
-        grid[flat] = torch.arange(n, dtype=torch.int32, device=coords.device)
-        return grid[flat[:, None] + (offs * strides).sum(1)[None, :]].to(torch.int64)
-    q = c[:, None, :].repeat(1, len(offs), 1)
-    q[:, :, 1:] += offs[None]
-    idx = cset.lookup(q.reshape(-1, 4)).view(n, len(offs))
-    return torch.where(idx < 0, torch.full_like(idx, n), idx)
+    cells = (int(c[:, 0].max()) + 1) * int(ext.prod())
+    if cells > DENSE_GRID_CELLS:  # the per-offset kernel map (sorted-key search) laid out as a table
+        table = torch.full((n, len(offs)), n, dtype=torch.int64, device=coords.device)
+        for o, m in enumerate(cset.submanifold_map(kernel_size)):
+            if m is None:
+                table[:, o] = torch.arange(n, device=coords.device)
+            else:
+                table[m[1], o] = m[0]
+        return table
+    # a dense grid of row indices (n = empty), padded by the kernel radius: every query is in range
+    strides = torch.stack([ext[1] * ext[2], ext[2], torch.ones_like(ext[2])])
+    grid = torch.full((cells,), n, dtype=torch.int32, device=coords.device)
+    flat = c[:, 0] * int(ext.prod()) + ((c[:, 1:] - lo) * strides).sum(1)
+    grid[flat] = torch.arange(n, dtype=torch.int32, device=coords.device)
+    return grid[flat[:, None] + (offs * strides).sum(1)[None, :]].to(torch.int64)
 
 
 @dataclass

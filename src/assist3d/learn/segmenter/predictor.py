@@ -123,7 +123,7 @@ class Predictor:
         if self.step.needs_model and loaded is None:
             raise DataError(f"post-processing step {method!r} needs a model")
         if not self.step.needs_model and tta:
-            raise DataError(f"test-time augmentation is for a network; step {method!r} has none")
+            raise DataError(f"test-time augmentation (segment --tta) is for a network; step {method!r} has none")
         self.loaded = loaded if self.step.needs_model else None
         self.tta = tta
         self.device = device
@@ -136,7 +136,7 @@ class Predictor:
         step = STEPS.get(method)
         if not step.needs_model:
             if checkpoints:
-                raise DataError(f"a checkpoint is for a step with a network; {method!r} has no weights")
+                raise DataError(f"a checkpoint (segment --checkpoint) is for a step with a network; {method!r} has no weights")
             return cls(None, method, tta=tta, device=device)
         if checkpoints is None:
             paths: list[str | Path] = [shipped_model_path()]
