@@ -25,6 +25,7 @@ from ...core.errors import ConfigError, DataError
 from ...core.fileio import write_bytes_atomic, write_text_atomic
 from ..models import mask3d as _mask3d  # noqa: F401  registers "mask3d"
 from ..models.registry import build_model as build_registered
+from ..trainer import Hook, Trainer as LoopTrainer
 from .config import ModelConfig, TrainConfig, dump_train_config, parse_train_config
 from .dist import DistInfo, all_reduce_mean, init_distributed, shutdown
 from .loader import PreparedBatch, Source, epoch_batches, prepare_batch
@@ -116,8 +117,9 @@ class StepStats:
     scenes: int
 
 
-class Trainer:
-    """Owns the model, optimiser and schedule; :meth:`step` trains on one batch of scene indices."""
+class Mask3DTrainer(LoopTrainer):
+    """The loop of :mod:`assist3d.learn.trainer` set up for the Mask3D-style model: AdamW, one-cycle
+    schedule, AMP on CUDA, DDP; :meth:`step` trains on one batch of scene indices."""
 
     def __init__(self, cfg: TrainConfig, source: Source, *, steps_total: int, device: str = "cpu",
                  dist_info: DistInfo | None = None):
@@ -132,16 +134,17 @@ class Trainer:
         if self.dist.world_size > 1:
             ids = [self.dist.local_rank] if device.startswith("cuda") else None
             model = torch.nn.parallel.DistributedDataParallel(model, device_ids=ids)
-        self.model = model
-        self.optimizer = torch.optim.AdamW(model.parameters(), lr=cfg.optim.lr, weight_decay=cfg.optim.weight_decay)
+        optimizer = torch.optim.AdamW(model.parameters(), lr=cfg.optim.lr, weight_decay=cfg.optim.weight_decay)
         # OneCycleLR needs a warm-up and an annealing phase of at least one step each
         total = max(steps_total, 4)
         pct = min(max(cfg.optim.pct_start, 1.5 / total), 1 - 1.5 / total)
-        self.scheduler = torch.optim.lr_scheduler.OneCycleLR(self.optimizer, max_lr=cfg.optim.lr, total_steps=total,
-                                                             pct_start=pct)
+        scheduler = torch.optim.lr_scheduler.OneCycleLR(optimizer, max_lr=cfg.optim.lr, total_steps=total,
+                                                        pct_start=pct)
         self.use_amp = cfg.optim.amp and device.startswith("cuda")
         self.amp_dtype = torch.bfloat16 if self.use_amp and torch.cuda.is_bf16_supported() else torch.float16
-        self.scaler = torch.amp.GradScaler("cuda") if self.use_amp and self.amp_dtype == torch.float16 else None
+        scaler = torch.amp.GradScaler("cuda") if self.use_amp and self.amp_dtype == torch.float16 else None
+        super().__init__(model, optimizer, self._item_loss, scheduler=scheduler, grad_clip=cfg.optim.grad_clip,
+                         scaler=scaler)
 
     def batch_loss(self, indices: list[int], *, rng: np.random.Generator, augment: bool = True) -> tuple[torch.Tensor, StepStats]:
         """Prepare the scenes ``indices`` with ``rng`` and return their weighted loss (:meth:`prepared_loss`)."""
@@ -172,29 +175,20 @@ class Trainer:
         stats /= len(indices)
         return loss, StepStats(float(loss.detach()), *stats.tolist(), scenes=len(indices))
 
-    def step(self, indices: list[int], *, rng: np.random.Generator) -> StepStats:
+    def _item_loss(self, model: torch.nn.Module, item: tuple[PreparedBatch, np.random.Generator]
+                   ) -> tuple[torch.Tensor, dict[str, float]]:
+        loss, stats = self.prepared_loss(item[0], rng=item[1])
+        return loss, {"loss": stats.loss, "objectness": stats.objectness, "mask_bce": stats.mask_bce,
+                      "dice": stats.dice, "scenes": stats.scenes}
+
+    def step(self, indices: list[int], *, rng: np.random.Generator) -> StepStats:  # type: ignore[override]
         """One optimisation step on the scenes ``indices``, prepared here with ``rng``."""
         return self.step_prepared(prepare_batch(self.source, self.cfg, indices, rng=rng), rng=rng)
 
     def step_prepared(self, batch: PreparedBatch, *, rng: np.random.Generator) -> StepStats:
-        """One optimisation step on a batch the loader prepared (:mod:`.loader`)."""
-        self.model.train()
-        self.optimizer.zero_grad(set_to_none=True)
-        loss, stats = self.prepared_loss(batch, rng=rng)
-        if self.scaler is not None:
-            self.scaler.scale(loss).backward()
-            self.scaler.unscale_(self.optimizer)
-        else:
-            loss.backward()
-        if self.cfg.optim.grad_clip > 0:
-            torch.nn.utils.clip_grad_norm_(self.model.parameters(), self.cfg.optim.grad_clip)
-        if self.scaler is not None:
-            self.scaler.step(self.optimizer)
-            self.scaler.update()
-        else:
-            self.optimizer.step()
-        self.scheduler.step()
-        return stats
+        """One optimisation step on a batch the loader prepared (:mod:`.loader`), outside :meth:`fit`'s counters."""
+        parts = self.train_step((batch, rng))
+        return StepStats(parts["loss"], parts["objectness"], parts["mask_bce"], parts["dice"], int(parts["scenes"]))
 
     def state(self) -> dict:
         return {"model": _unwrap(self.model).state_dict(), "optimizer": self.optimizer.state_dict(),
@@ -216,6 +210,31 @@ class Trainer:
             self.scheduler.load_state_dict(saved)
         if self.scaler is not None and state.get("scaler") is not None:
             self.scaler.load_state_dict(state["scaler"])
+
+
+Trainer = Mask3DTrainer  # the name this module has always exported
+
+
+class _EpochLog(Hook):
+    """Each step's row (``epoch, step, lr, loss, ...``): the loss averaged over processes, then, on the main
+    process, to the loggers and ``on_step``."""
+
+    def __init__(self, cfg: TrainConfig, info: DistInfo, device: str, sinks: Sequence[TrainLogger],
+                 on_step: Callable[[dict], None] | None, steps_per_epoch: int) -> None:
+        self.cfg, self.info, self.device, self.sinks = cfg, info, device, sinks
+        self.on_step, self.steps_per_epoch = on_step, steps_per_epoch
+        self.epoch = 0
+        self.last_loss = float("nan")
+
+    def after_step(self, trainer: LoopTrainer, record: dict[str, float]) -> None:
+        self.last_loss = float(all_reduce_mean(torch.tensor(record["loss"], device=self.device), self.info))
+        row = {"epoch": self.epoch + 1, "step": trainer.steps, "lr": record["lr"], "loss": self.last_loss,
+               "objectness": record["objectness"], "mask_bce": record["mask_bce"], "dice": record["dice"],
+               "scenes": int(record["scenes"]) * self.info.world_size, "seconds": record["step_seconds"]}
+        if self.info.is_main:
+            log_all(self.sinks, [row])
+            if self.on_step is not None:
+                self.on_step({**row, "epochs": self.cfg.optim.epochs, "steps_per_epoch": self.steps_per_epoch})
 
 
 @dataclass
@@ -268,7 +287,9 @@ def train(cfg: TrainConfig, out_dir: str | Path, *, resume: bool = False, source
         else:
             sinks = list(loggers)
     t0 = time.perf_counter()
-    last_loss = float("nan")
+    trainer.steps = step
+    epoch_log = _EpochLog(cfg, info, device, sinks, on_step, steps_per_epoch)
+    trainer.hooks = [epoch_log]
     ckpt = last
     try:
         for epoch in range(start_epoch, cfg.optim.epochs):
@@ -276,35 +297,23 @@ def train(cfg: TrainConfig, out_dir: str | Path, *, resume: bool = False, source
             order = list(sampler)
             torch.manual_seed(cfg.seed * 1_000_003 + epoch * 101 + info.rank)
             batches = epoch_batches(src, cfg, order, epoch=epoch, rank=info.rank, workers=cfg.data.workers)
-            for b in range(steps_per_epoch):
-                ts = time.perf_counter()
-                batch = next(batches)
-                lr = trainer.optimizer.param_groups[0]["lr"]  # the rate this step uses
-                # the loss-point draw has its own stream, so it does not depend on where the batch was built
-                stats = trainer.step_prepared(batch, rng=np.random.default_rng([cfg.seed, epoch, info.rank, b, 1]))
-                step += 1
-                loss_t = all_reduce_mean(torch.tensor(stats.loss, device=device), info)
-                last_loss = float(loss_t)
-                row = {"epoch": epoch + 1, "step": step, "lr": lr, "loss": last_loss,
-                       "objectness": stats.objectness, "mask_bce": stats.mask_bce, "dice": stats.dice,
-                       "scenes": stats.scenes * info.world_size, "seconds": time.perf_counter() - ts}
-                if info.is_main:
-                    log_all(sinks, [row])
-                    if on_step is not None:
-                        on_step({**row, "epochs": cfg.optim.epochs, "steps_per_epoch": steps_per_epoch})
+            epoch_log.epoch = epoch
+            # the loss-point draw has its own stream, so it does not depend on where the batch was built
+            trainer.fit((next(batches), np.random.default_rng([cfg.seed, epoch, info.rank, b, 1]))
+                        for b in range(steps_per_epoch))
             batches.close()  # stops the loader's workers
             if info.is_main:
-                save_checkpoint(last, trainer.model, trainer.optimizer, trainer.scheduler, epoch + 1, step, cfg,
-                                trainer.scaler)
+                save_checkpoint(last, trainer.model, trainer.optimizer, trainer.scheduler, epoch + 1, trainer.steps,
+                                cfg, trainer.scaler)
                 if (epoch + 1) % max(cfg.checkpoint_every, 1) == 0 or epoch + 1 == cfg.optim.epochs:
                     ckpt = out / f"epoch_{epoch + 1:04d}.pt"
-                    save_checkpoint(ckpt, trainer.model, trainer.optimizer, trainer.scheduler, epoch + 1, step, cfg,
-                                    trainer.scaler)
+                    save_checkpoint(ckpt, trainer.model, trainer.optimizer, trainer.scheduler, epoch + 1, trainer.steps,
+                                    cfg, trainer.scaler)
     finally:
         close_all(sinks)
         shutdown(info)
-    return TrainResult(out_dir=out, epochs=cfg.optim.epochs, steps=step, last_loss=last_loss, checkpoint=ckpt,
-                       seconds=time.perf_counter() - t0)
+    return TrainResult(out_dir=out, epochs=cfg.optim.epochs, steps=trainer.steps, last_loss=epoch_log.last_loss,
+                       checkpoint=ckpt, seconds=time.perf_counter() - t0)
 
 
 def config_from_checkpoint(state: dict) -> TrainConfig:

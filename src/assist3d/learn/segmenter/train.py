@@ -9,10 +9,8 @@ number of steps it reached is recorded).
 
 from __future__ import annotations
 
-import copy
 import logging
 import math
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Sequence
@@ -24,6 +22,7 @@ import torch.nn.functional as F
 from ..engine.loggers import CsvLog, TrainLogger, close_all, log_all
 from ..models.sparse import resolve_precision, use_precision
 from ..models.registry import build_model
+from ..trainer import CallbackHook, CheckpointHook, EMAHook, Hook, Trainer, update_ema  # noqa: F401  update_ema: the API
 from ...core.errors import ConfigError
 from .checkpoint import load_segmenter, save_segmenter
 from .config import SegmenterConfig
@@ -98,17 +97,6 @@ def _lr(cfg: SegmenterConfig, progress: float) -> float:
     return cfg.optim.lr * (0.01 + 0.99 * 0.5 * (1 + math.cos(math.pi * p)))
 
 
-@torch.no_grad()
-def update_ema(ema: Segmenter, model: Segmenter, decay: float, step: int) -> None:
-    """``ema <- d * ema + (1 - d) * model`` with ``d = min(decay, (1 + step) / (10 + step))``: the
-    usual warm-up, so the first steps' random weights do not linger in the average. Buffers are copied."""
-    d = min(decay, (1 + step) / (10 + step))
-    for pe, p in zip(ema.parameters(), model.parameters()):
-        pe.mul_(d).add_(p.detach(), alpha=1.0 - d)
-    for be, b in zip(ema.buffers(), model.buffers()):
-        be.copy_(b)
-
-
 def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str | Path, *, seed: int,
                     budget: Budget, meta: dict | None = None, device: str = "cpu", loader_workers: int = 0,
                     on_step: Callable[[dict], None] | None = None,
@@ -133,8 +121,9 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
     precision = resolve_precision(cfg.optim.precision, device)
     use_precision(model, precision)
     opt = torch.optim.Adam(model.parameters(), lr=cfg.optim.lr, weight_decay=cfg.optim.weight_decay)
-    ema = copy.deepcopy(model).requires_grad_(False) if cfg.optim.ema_decay > 0 else None
-    step, seconds, last_loss = 0, 0.0, float("nan")
+    ema_hook = EMAHook(model, cfg.optim.ema_decay) if cfg.optim.ema_decay > 0 else None
+    trainer = Trainer(model, opt, lambda m, examples: example_loss(m, examples, cfg, device),
+                      lr_at=lambda t: _lr(cfg, budget.progress(t.steps, t.seconds)), grad_clip=5.0, check_finite=True)
     if last.is_file():
         loaded = load_segmenter(last, device, weights="live")
         if loaded.config != cfg:
@@ -142,58 +131,47 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
         model.load_state_dict(loaded.model.state_dict())
         if loaded.optimizer is not None:
             opt.load_state_dict(loaded.optimizer)
-        if ema is not None:
+        if ema_hook is not None:
             if loaded.ema_state is None:
                 raise ConfigError(f"{last}: holds no averaged weights although optim.ema_decay is set")
-            ema.load_state_dict(loaded.ema_state)
-        step = int(loaded.progress.get("step", 0))
-        seconds = float(loaded.progress.get("train_seconds", 0.0))
-        last_loss = float(loaded.progress.get("loss", float("nan")))
-        log.info("resumed %s at step %d (%.0f s trained)", last, step, seconds)
+            ema_hook.ema.load_state_dict(loaded.ema_state)
+        trainer.steps = int(loaded.progress.get("step", 0))
+        trainer.seconds = float(loaded.progress.get("train_seconds", 0.0))
+        trainer.last_loss = float(loaded.progress.get("loss", float("nan")))
+        log.info("resumed %s at step %d (%.0f s trained)", last, trainer.steps, trainer.seconds)
     meta = dict(meta or {})
     csv_log = CsvLog(out / "train_log.csv", LOG_FIELDS)
-    csv_log.truncate(step)
+    csv_log.truncate(trainer.steps)
     sinks: list[TrainLogger] = [csv_log, *loggers]
-    pending: list[dict] = []
+    rows = _PendingRows()
 
-    def save() -> None:
-        progress = {"step": step, "train_seconds": seconds, "loss": last_loss, "seed": seed, "budget": budget.as_dict(),
-                    "precision": precision}
-        save_segmenter(last, model, cfg, meta={**meta, **progress}, optimizer=opt, progress=progress, ema=ema)
-        log_all(sinks, pending)  # rows reach the logs only with the checkpoint that covers them
-        pending.clear()
+    def save(t: Trainer) -> None:
+        progress = {"step": t.steps, "train_seconds": t.seconds, "loss": t.last_loss, "seed": seed,
+                    "budget": budget.as_dict(), "precision": precision}
+        save_segmenter(last, model, cfg, meta={**meta, **progress}, optimizer=opt, progress=progress,
+                       ema=ema_hook.ema if ema_hook is not None else None)
+        log_all(sinks, rows.pending)  # rows reach the logs only with the checkpoint that covers them
+        rows.pending.clear()
 
+    trainer.hooks = [*([ema_hook] if ema_hook is not None else []), rows]
+    if on_step is not None:
+        trainer.hooks.append(CallbackHook(on_step, lambda t: {"progress": budget.progress(t.steps, t.seconds)}))
+    trainer.hooks.append(CheckpointHook(save, every_s=CHECKPOINT_EVERY_S))
     try:
-        last_save = time.perf_counter()
-        model.train()
-        with BatchLoader(scenes, cfg, seed, step, workers=loader_workers, probs=probs) as loader:
-            while budget.progress(step, seconds) < 1.0:
-                t0 = time.perf_counter()
-                _, examples = loader.next()
-                for g in opt.param_groups:
-                    g["lr"] = _lr(cfg, budget.progress(step, seconds))
-                opt.zero_grad(set_to_none=True)
-                loss, parts = example_loss(model, examples, cfg, device)
-                if not math.isfinite(parts["loss"]):
-                    raise FloatingPointError(f"training diverged at step {step} (loss {parts['loss']}); lower optim.lr")
-                loss.backward()
-                torch.nn.utils.clip_grad_norm_(model.parameters(), 5.0)
-                opt.step()
-                if ema is not None:
-                    update_ema(ema, model, cfg.optim.ema_decay, step)
-                step += 1
-                seconds += time.perf_counter() - t0
-                last_loss = parts["loss"]
-                pending.append({"step": step, "train_seconds": round(seconds, 3), "lr": opt.param_groups[0]["lr"],
-                                **{k: round(v, 6) for k, v in parts.items()}})
-                if on_step is not None:
-                    on_step({"step": step, "train_seconds": seconds, "progress": budget.progress(step, seconds),
-                             "lr": opt.param_groups[0]["lr"], **parts})
-                if time.perf_counter() - last_save > CHECKPOINT_EVERY_S:
-                    save()
-                    last_save = time.perf_counter()
-        save()
+        with BatchLoader(scenes, cfg, seed, trainer.steps, workers=loader_workers, probs=probs) as loader:
+            trainer.fit(iter(lambda: loader.next()[1], None), until=lambda t: budget.progress(t.steps, t.seconds) >= 1.0)
     finally:
         close_all(sinks)
 
-    return TrainRecord(steps=step, train_seconds=seconds, last_loss=last_loss, checkpoint=last)
+    return TrainRecord(steps=trainer.steps, train_seconds=trainer.seconds, last_loss=trainer.last_loss, checkpoint=last)
+
+
+class _PendingRows(Hook):
+    """Collects each step's log row (rounded) until the checkpoint that covers it is written."""
+
+    def __init__(self) -> None:
+        self.pending: list[dict] = []
+
+    def after_step(self, trainer: Trainer, record: dict[str, float]) -> None:
+        self.pending.append({"step": trainer.steps, "train_seconds": round(trainer.seconds, 3), "lr": record["lr"],
+                             **{k: round(v, 6) for k, v in record.items() if k in LOG_FIELDS[3:]}})
