@@ -39,7 +39,7 @@ from ..core.taxonomy.roomtypes import RoomTemplate
 from ..llm.cache import ResponseCache
 from ..llm.client import ChatAnswer, ChatClient, Usage
 from ..llm.prompts import render_repair_message
-from ..llm.rooms import check_room_answer, room_messages
+from .llm_rooms import check_room_answer, room_messages
 from ..llm.schema import parse_json_text, salvage_groups, salvage_objects
 from .llm_prompts import render_batch_messages, render_plan_messages
 from .llm_schema import CheckedAnswer, check_answer, split_batch_answer

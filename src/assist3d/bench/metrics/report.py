@@ -18,7 +18,7 @@ from ..data import open_dataset
 from ...core.errors import AssistError, DataError
 from ...export.manifest import read_manifest
 from ...core.fileio import atomic_path
-from ...llm.vlm import vlm_layout_score
+from .vlm import vlm_layout_score
 from ...core.rng import make_rng
 from .context import context_complexity, per_class_max_cooccurrence
 from .diversity import Codebook, code_entropy, fit_codebook, geometry_diversity, geometry_diversity_se

@@ -12,7 +12,7 @@ import pytest
 
 from assist3d.assets.catalog import Catalog
 from assist3d.core.contracts import AssetRecord, MeshData, SupportSurface
-from assist3d.llm.rooms import NO_HOLD, check_room_answer
+from assist3d.planning.llm_rooms import NO_HOLD, check_room_answer
 from assist3d.config.presets import apply_preset
 from assist3d.scene.layout import build_layout
 from assist3d.core.taxonomy.roomtypes import ROOM_TEMPLATES

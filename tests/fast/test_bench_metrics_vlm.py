@@ -15,8 +15,8 @@ import pytest
 from assist3d.config import LLMConfig
 from assist3d.core.contracts import SceneMesh
 from assist3d.core.errors import DataError
-from assist3d.llm.views import encode_png, render_point_views, render_views
-from assist3d.llm.vlm import score_layout, vlm_layout_score
+from assist3d.bench.metrics.views import encode_png, render_point_views, render_views
+from assist3d.bench.metrics.vlm import score_layout, vlm_layout_score
 from llm_fakeserver import SENTINEL, FakeServer, Step, files_containing
 
 
@@ -169,7 +169,7 @@ def test_vlm_layout_score_of_a_scene_folder(secret_env, tmp_path):
 def test_cameras_stay_inside_an_l_shaped_room():
     from shapely.geometry import Point, Polygon
 
-    from assist3d.llm.views import camera_positions
+    from assist3d.bench.metrics.views import camera_positions
 
     poly = Polygon([(0, 0), (6, 0), (6, 4), (3, 4), (3, 6), (0, 6)])
     inside = lambda xy: np.array([poly.contains(Point(*p)) for p in xy])  # noqa: E731

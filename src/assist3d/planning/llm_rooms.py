@@ -18,7 +18,7 @@ from typing import Any
 from ..core.contracts import Room
 from ..core.taxonomy.classes import normalise_class
 from ..core.taxonomy.roomtypes import ROOM_TEMPLATES, Item, RoomTemplate
-from .prompts import describe_room, load_template
+from ..llm.prompts import describe_room, load_template
 
 MAX_QUANTITY = 8
 MAX_ENTRIES = {"floor": 20, "wall": 10, "small": 12}

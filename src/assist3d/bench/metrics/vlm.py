@@ -23,13 +23,13 @@ from typing import Any
 
 import numpy as np
 
-from ..config import LLMConfig
-from ..core.contracts import Room
-from ..core.errors import ConfigError, DataError, LLMError, inert, shown
-from .cache import ResponseCache
-from .client import ChatClient, Usage
-from .prompts import describe_room, load_template, render_repair_message
-from .schema import parse_json_text
+from ...config import LLMConfig
+from ...core.contracts import Room
+from ...core.errors import ConfigError, DataError, LLMError, inert, shown
+from ...llm.cache import ResponseCache
+from ...llm.client import ChatClient, Usage
+from ...llm.prompts import describe_room, load_template, render_repair_message
+from ...llm.schema import parse_json_text
 from .views import render_point_views
 
 log = logging.getLogger(__name__)

@@ -15,11 +15,11 @@ from typing import Callable
 
 import numpy as np
 
-from ..core.contracts import SceneMesh
-from ..core.errors import RenderError
-from ..render.camera import pixel_directions
-from ..render.raycast import make_caster
-from ..render.rgbd import face_normals
+from ...core.contracts import SceneMesh
+from ...core.errors import RenderError
+from ...render.camera import pixel_directions
+from ...render.raycast import make_caster
+from ...render.rgbd import face_normals
 
 FOV_DEG = 75.0
 BACKGROUND = np.array([235, 235, 235], dtype=np.float32)
