@@ -106,3 +106,30 @@ def test_models_are_built_by_name_and_a_new_one_is_one_registration():
         MODELS.remove("test-linear")
     with pytest.raises(ConfigError, match="unknown model 'segmentr'; did you mean 'segmenter'"):
         build_model("segmentr", NetConfig())
+
+
+def test_config_choices_come_from_the_registries(tmp_path):
+    """The config takes any planner / ray caster name: one registered from outside the package is chosen
+    like a built-in one (no schema edit), and a name nobody registered is refused before anything is
+    written, naming the key and the closest registered name."""
+    from assist3d.pipeline.dataset import generate_dataset
+    from assist3d.pipeline.scene import check_plugins
+
+    made = []
+    PLANNERS.add("test-planner", lambda cfg: made.append(cfg.seed) or RulePlanner())
+    CASTERS.add("test-caster", lambda v, f: NumpyCaster(v, f))
+    try:
+        cfg = parse_config({"seed": 5, "layout": {"planner": "test-planner"}, "render": {"backend": "test-caster"}})
+        check_plugins(cfg)
+        assert isinstance(make_planner(cfg), RulePlanner) and made == [5]
+    finally:
+        PLANNERS.remove("test-planner")
+        CASTERS.remove("test-caster")
+    for data, msg in (({"layout": {"planner": "rulez"}}, "layout.planner: unknown relation planner 'rulez'; did you mean 'rules'"),
+                      ({"render": {"backend": "embre"}}, "render.backend: unknown render backend 'embre'; did you mean 'embree'")):
+        cfg = parse_config(data)
+        with pytest.raises(ConfigError, match=msg):
+            generate_dataset(cfg, tmp_path / "out", [0])
+        assert not (tmp_path / "out").exists()
+    with pytest.raises(ConfigError):
+        parse_config({"layout": {"planner": ""}})

@@ -114,9 +114,9 @@ class SelectionConfig(Section):
 class LayoutConfig(Section):
     """Relation planning and depth-first placement (paper section 'Scene Layout Generation')."""
 
-    planner: Literal["rules", "llm", "none"] = Field("rules", description="Relation planner: rule-based (default), "
-                                                                          "an OpenAI-compatible LLM (paper: GPT-4), or "
-                                                                          "none (random baseline).")
+    planner: str = Field("rules", min_length=1, description="Relation planner: rules (default), llm (an "
+                                                            "OpenAI-compatible LLM; paper: GPT-4), none (random "
+                                                            "baseline), or any name registered in PLANNERS.")
     cell_size: float = Field(0.15, ge=0.01, le=2, description="Floor grid cell, m, 0.01..2 (paper: uniform grid; "
                                                               "0.1-0.25).")
     rotations: int = Field(4, ge=1, le=360, description="Yaw steps per full turn tried for each object (>= 4; at "
@@ -149,8 +149,9 @@ class LayoutConfig(Section):
 class RenderConfig(Section):
     """Realistic point-cloud construction (paper section 'Realistic Point Cloud Construction')."""
 
-    backend: Literal["embree", "numpy"] = Field("embree", description="Ray-casting backend: embree (fast, default) "
-                                                                      "or numpy (slow, exact reference).")
+    backend: str = Field("embree", min_length=1, description="Ray-casting backend: embree (fast, default), numpy "
+                                                             "(slow, exact reference), or any name registered in "
+                                                             "CASTERS.")
     vantage_points: int = Field(5, ge=1, le=100, description="Camera positions picked by farthest point sampling, at "
                                                              "most 100 (paper: 5).")
     views_per_point: int = Field(12, ge=1, le=360, description="Views per position, at most 360 (paper: 12 at "

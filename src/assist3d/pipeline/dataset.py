@@ -34,7 +34,7 @@ from ..core.interrupts import Interrupted, worker_pool
 from ..core.records import STAGES, stage_timings
 from ..core.rng import scene_seed
 from ..planning.planners import make_planner
-from .scene import SceneGenerator, SceneJob, scene_classes, scene_name
+from .scene import SceneGenerator, SceneJob, check_plugins, scene_classes, scene_name
 
 log = logging.getLogger(__name__)
 
@@ -189,6 +189,7 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
         os.environ.setdefault(var, "1")
     cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     threads = max(1, min(cfg.render.threads, cpus // workers)) if workers > 1 else cfg.render.threads
+    check_plugins(cfg)  # an unregistered planner or ray caster is refused before anything is written
     if backend == "ray":
         ray_backend.connect(ray_address)  # before anything is written
     gen = SceneGenerator(cfg) if workers == 1 and backend == "local" else None  # in-process: open the catalog once

@@ -18,7 +18,10 @@ from ..config import GenerateConfig
 from ..export import write_scene
 from ..export.glb import export_glb
 from ..core.records import LLMUsage, SceneRecord, StageTimings
+from ..core.errors import ConfigError
+from ..planning.planners import PLANNERS, planner_name
 from ..render import make_caster, render_point_cloud, verify_labels
+from ..render.raycast import CASTERS
 from ..core.rng import make_rng, scene_seed
 from ..scene.assemble import assemble_scene
 from ..scene.layout import build_layout
@@ -38,6 +41,16 @@ class SceneJob:
     verify: bool = False
 
 
+def check_plugins(cfg: GenerateConfig) -> None:
+    """Refuse, before any work, a relation planner or ray caster that no module registered: one line naming
+    the key and the closest registered name. The config accepts any name, so a plugin registered from
+    outside the package (``PLANNERS.add``, ``CASTERS.add``) is chosen like a built-in one."""
+    for key, registry, name in (("layout.planner", PLANNERS, planner_name(cfg)),
+                                ("render.backend", CASTERS, cfg.render.backend)):
+        if name not in registry:
+            raise ConfigError(f"{key}: unknown {registry.kind} {name!r}{registry.hint(name)}")
+
+
 def scene_classes(catalog, cfg: GenerateConfig) -> tuple[str, ...]:
     """The class list a point's ``segment`` indexes: the catalog's classes, then ``door`` and ``window``
     when ``room.fill_openings`` is on and the catalog lacks them (appended, so the catalog's indices
@@ -52,6 +65,7 @@ class SceneGenerator:
     """Everything one process needs to generate scenes: the config and the opened catalog."""
 
     def __init__(self, cfg: GenerateConfig, *, threads: int | None = None) -> None:
+        check_plugins(cfg)
         self.cfg = cfg
         if threads is not None:
             self.cfg = cfg.model_copy(update={"render": cfg.render.model_copy(update={"threads": threads})})
