@@ -5,7 +5,7 @@
 The batches are the probe's own (``build_batch``: crop, augmentation, voxelisation with the default
 recipe and seed 0), built before the clock starts, so the figure is the network's share of a step; the
 example building runs in the loader's workers during training (``--loader-workers``) or adds about
-0.65 s per step without them (docs/fidelity.md, "Cost"). One warm-up step, then the median of ``--steps``
+0.65 s per step without them (experiments/fidelity-log.md, "Cost"). One warm-up step, then the median of ``--steps``
 timed steps. Compare two code versions by running it under each (for example with ``PYTHONPATH``
 pointing at another checkout's ``src``) with a whole-process timer.
 """

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The paper's generator comparison on real scans, at small scale (docs/fidelity.md):
+# The paper's generator comparison on real scans, at small scale (experiments/fidelity-log.md):
 # one dataset per generator (equal scene counts, same catalog, seed and render settings), the CPU
 # segmenter trained on each for the same number of steps with K seeds, zero-shot AP on the real dev
 # scans; plus the geometric reference and a real-only model (leave-one-room-out over the dev scans).

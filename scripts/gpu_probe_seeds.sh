@@ -8,7 +8,7 @@
 #
 # Runs `scripts/device_setup.sh` (carried wheels and packed data, see there), then one
 # `assist3d probe --seeds 1 --first-seed S --device cuda` process per seed, PARALLEL (default 4) at
-# a time, each into its own folder. Measured on an H200 (docs/fidelity.md, "Speed of the probe on a
+# a time, each into its own folder. Measured on an H200 (experiments/fidelity-log.md, "Speed of the probe on a
 # GPU"): one process trains 821 steps in 165 s, four at once 376-381 s each, three 309-310 s each.
 # Each seed comes back as $OUT/seedS.tar holding probe.json and seed_S/ (model.pt, result.json,
 # train_log.csv, probe.log): the device tool returns at most 8 files (16 MiB each), so at most 8

@@ -1,5 +1,5 @@
 """Learned vs hybrid inference of the CPU segmenter over many trained models, on real scans
-(docs/fidelity.md, "Hybrid inference"). Each model's network runs once per scan; the geometric
+(experiments/fidelity-log.md, "Hybrid inference"). Each model's network runs once per scan; the geometric
 components and the superpoints do not depend on the model and are computed once per scan.
 
     python scripts/hybrid_eval.py MODEL.pt [MODEL.pt ...] --out hybrid.json

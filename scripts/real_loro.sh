@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The real-only rows of docs/fidelity.md: the segmenter trained on real scans, leave one room out
+# The real-only rows of experiments/fidelity-log.md: the segmenter trained on real scans, leave one room out
 # (rescans of a room share the first 9 characters of their name: all of a room's scans are held out
 # together), the same budget and recipe as the generator comparison.
 #

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Train a candidate for the shipped segmenter (docs/fidelity.md, "The shipped model"): generated data
+# Train a candidate for the shipped segmenter (experiments/fidelity-log.md, "The shipped model"): generated data
 # only, the default recipe, seed 0, then score it with both inference paths on the real scans.
 #
 #   scripts/train_shipped.sh ASSETS OUT_DIR          # env: STEPS (1200), N0 (60), N1 (180),

@@ -1,6 +1,6 @@
-# How many training seeds a recipe decision needs on the 10 dev scans (docs/fidelity.md, "How many
+# How many training seeds a recipe decision needs on the 10 dev scans (experiments/fidelity-log.md, "How many
 # seeds a decision needs"). The per-seed dev AP50 figures below are copied from the tables of
-# docs/fidelity.md (every 821-step recipe with two or more seeds); the seed standard deviation is
+# experiments/fidelity-log.md (every 821-step recipe with two or more seeds); the seed standard deviation is
 # pooled over recipes (each recipe's own mean removed), and the seeds per recipe for a two-sided 5 %
 # test with 80 % power follow the normal approximation n = 2 (z_0.975 + z_0.8)^2 sd^2 / d^2 (the sd taken
 # as known), and with a t test when the sd must come from the compared seeds alone. The pooled figure

@@ -1,4 +1,4 @@
-"""Where hybrid inference loses real objects (docs/fidelity.md, "Fallback proposals"): every ground-truth
+"""Where hybrid inference loses real objects (experiments/fidelity-log.md, "Fallback proposals"): every ground-truth
 object of the real scans, classified by the prediction that overlaps it best.
 
     python experiments/tools/fallback_diagnosis.py [--checkpoint MODEL.pt] [--recipe first|default|learned]

@@ -1,10 +1,10 @@
-"""Hybrid inference variants on held-out generated scenes (docs/fidelity.md, "Fallback proposals"):
+"""Hybrid inference variants on held-out generated scenes (experiments/fidelity-log.md, "Fallback proposals"):
 how the fallback proposals do where the network is in its own domain (the stability ranking it also scored has left the code).
 
     python experiments/tools/hybrid_generated.py MODEL.pt [MODEL.pt ...] --data assist3d:HELD_OUT [--scenes 60]
         [--out generated.json]
 
-HELD_OUT is a generated dataset none of the models was trained on (docs/fidelity.md used dataset
+HELD_OUT is a generated dataset none of the models was trained on (experiments/fidelity-log.md used dataset
 seed 1: ``assist3d generate --num-scenes 180 --seed 1 --preset assist3d``). Scenes are thinned to
 ~2.5 points per occupied 5 cm voxel like the real scans (seeded by the scene id, as in
 ``experiments/tools/proposal_scorer.py``); every generated instance counts as an object. Rows per model:

@@ -1,4 +1,4 @@
-"""Inference-time variants of the CPU segmenter, scored on real scans (docs/fidelity.md, "Inference
+"""Inference-time variants of the CPU segmenter, scored on real scans (experiments/fidelity-log.md, "Inference
 variants"). The network is run once per scan (plus 7 rotated / mirrored copies for test-time
 augmentation) and the per-voxel outputs are cached; the variants only change what happens after:
 

@@ -13,7 +13,7 @@ against the scan's own labels:
     python experiments/tools/noise_robustness.py --sigma 0.001 --mask-change 0 1 2 --out change.json
         (how far the masks move, apart from the metric: mask_change below)
 
-The figures of docs/fidelity.md "Noisy scans" before the plane refit was adopted for hybrid inference
+The figures of experiments/fidelity-log.md "Noisy scans" before the plane refit was adopted for hybrid inference
 were made with ``--refine-planes 0`` (then the default); today's default refits hybrid inference's planes.
 
 Rows per (sigma, denoise): ``geometric`` (no model), ``learned`` and ``hybrid`` (the shipped model
@@ -73,7 +73,7 @@ def denoise_points(coord: np.ndarray, radius: float = 0.05, cell: float = 0.01, 
     (raw fused depth, a LiDAR sweep) back towards one, as in the reconstructed meshes ScanNet's
     points come from, and rounds edges and small parts within about ``radius``. Cells, not points,
     are the neighbours, so the cost and the result depend little on the point density. Measured in
-    docs/fidelity.md ("Noisy scans"; not adopted). Deterministic."""
+    experiments/fidelity-log.md ("Noisy scans"; not adopted). Deterministic."""
     coord = np.asarray(coord, np.float32)
     if len(coord) < 3:
         return coord.copy()

@@ -1,4 +1,4 @@
-"""A learned proposal scorer for hybrid inference, trained on generated scenes (docs/fidelity.md,
+"""A learned proposal scorer for hybrid inference, trained on generated scenes (experiments/fidelity-log.md,
 "Inference variants"): measured, not adopted.
 
 Why: with its own masks, hybrid inference would score dev AP50 0.41 instead of 0.245 if they were

@@ -1,5 +1,5 @@
 """experiments/tools/fallback_diagnosis.py: the per-object categories behind the "Fallback proposals" figures of
-docs/fidelity.md."""
+experiments/fidelity-log.md."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""experiments/tools/noise_robustness.py: the denoising measured (and not adopted) in docs/fidelity.md, "Noisy scans"."""
+"""experiments/tools/noise_robustness.py: the denoising measured (and not adopted) in experiments/fidelity-log.md, "Noisy scans"."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """experiments/tools/proposal_scorer.py: the classification of predictions behind the "what limits hybrid AP50"
-figures of docs/fidelity.md, and the scorer's fit."""
+figures of experiments/fidelity-log.md, and the scorer's fit."""
 
 from __future__ import annotations
 

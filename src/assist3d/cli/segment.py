@@ -208,7 +208,7 @@ def segment_cmd(
                                "learned (the model's instances only) or "
                                "geometric (planes removed, connected components; no model)"),
     tta: bool = typer.Option(False, "--tta", help="average the network over 8 turned and mirrored copies of the scan "
-                             "(8x the network's time; measured in docs/fidelity.md, off by default)"),
+                             "(8x the network's time; measured in experiments/fidelity-log.md, off by default)"),
     png: bool = typer.Option(False, "--png", help="also write <scene_id>.png, a top view coloured by instance"),
     as_json: bool = typer.Option(False, "--json", help="print one JSON line per scene (instances, seconds, AP when GT is known)"),
     threads: int = typer.Option(0, "--threads", min=0, max=256, help="torch CPU threads (0 = all cores)"),

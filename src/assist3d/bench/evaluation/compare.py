@@ -5,12 +5,12 @@ loses on everything else can still raise the pooled figure. :func:`paired_compar
 metric per scan for each side (for a recipe, the mean over its seeds), and reports the mean
 per-scan difference, how many scans each side wins, the difference per room, and a bootstrap
 interval of the mean difference that resamples **rooms** with all their scans: rescans of one room
-share its objects and are not independent draws (docs/fidelity.md, "Every change measured on the
+share its objects and are not independent draws (experiments/fidelity-log.md, "Every change measured on the
 real scans").
 
 That interval answers "do these models beat those on other rooms?", not "do other seeds of recipe B
 beat other seeds of recipe A?": seeds of one recipe differ by as much as recipes do
-(docs/fidelity.md, "How many seeds a decision needs"). :func:`recipe_comparison` takes every run of
+(experiments/fidelity-log.md, "How many seeds a decision needs"). :func:`recipe_comparison` takes every run of
 each side and resamples the runs of each side as well as the rooms, so that its interval also holds
 the seed spread (with two runs a side it is still too narrow: a bootstrap of two values underrates
 their spread).

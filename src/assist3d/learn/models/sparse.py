@@ -621,7 +621,7 @@ class SparseSceneNorm(nn.Module):
         f = x.feats
         # Scenes in contiguous rows (known once per coordinate set): each scene is one call of the fused
         # batch-norm kernel in training mode without running statistics, which is this normalisation
-        # (biased variance) at a fraction of the general path's time (docs/fidelity.md, "Cost").
+        # (biased variance) at a fraction of the general path's time (experiments/fidelity-log.md, "Cost").
         sizes = x.cset.scene_sizes()
         if sizes is not None and min(s for s in sizes if s) > 1:  # batch_norm refuses a single row
             parts = [F.batch_norm(p, None, None, self.weight, self.bias, True, 0.0, self.eps)

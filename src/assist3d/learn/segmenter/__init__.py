@@ -4,5 +4,5 @@
 centre-offset heads), ``data`` (augmented training examples), ``train`` (budgeted, resumable
 training), ``cluster`` (instances from offsets), ``infer``, ``geometric`` (non-learned reference),
 ``checkpoint`` (safe, tensors-only files), ``probe`` (the data-quality benchmark), ``shipped``.
-See ``docs/fidelity.md``.
+See ``experiments/fidelity-log.md``.
 """

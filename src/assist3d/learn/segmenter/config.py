@@ -1,6 +1,6 @@
 """The CPU segmenter's configuration (pydantic, validated; stored inside every checkpoint as JSON).
 
-Defaults are the settings chosen in ``docs/fidelity.md``: 5 cm voxels, geometry-only input, a
+Defaults are the settings chosen in ``experiments/fidelity-log.md``: 5 cm voxels, geometry-only input, a
 4-level sparse residual U-Net with per-scene normalisation, foreground + centre-offset heads,
 offset-shifted connected components for instances.
 """
@@ -62,7 +62,7 @@ class OptimConfig(Section):
     offset_weight: float = Field(1.0, ge=0.0, description="weight of the L1 loss on centre offsets (object voxels)")
     direction_weight: float = Field(0.5, ge=0.0, description="weight of the offset direction loss (minus cosine)")
     ema_decay: float = Field(0.99, ge=0.0, lt=1.0, description="exponential moving average of the weights, kept "
-                             "beside the trained ones and used as the final model (0 = off; docs/fidelity.md "
+                             "beside the trained ones and used as the final model (0 = off; experiments/fidelity-log.md "
                              "'Weight averaging')")
     precision: Literal["auto", "float32", "bfloat16"] = Field(
         "auto", description="arithmetic of the sparse convolutions in training: float32, or bfloat16 inputs "
@@ -87,7 +87,7 @@ BEFORE_ADDED: dict[tuple[str, str], Any] = {("optim", "ema_decay"): 0.0,  # no w
 # Options measured and not adopted, taken out of the schema: (section, key) -> the values that mean "off"
 # (None: any value, for a setting that only mattered when another was on). A stored configuration holding one
 # of them "off" reads as today's; one that was on was trained with a recipe this version no longer runs
-# (docs/fidelity.md names what each did and where it was measured).
+# (experiments/fidelity-log.md names what each did and where it was measured).
 RETIRED: dict[tuple[str, str], tuple[Any, ...] | None] = {
     ("augment", "elastic"): ((), []),  # smooth random warps
     ("augment", "top_cut_p"): (0, 0.0),  # removing everything above a random height

@@ -1,7 +1,7 @@
 """Training examples for the segmenter: crop, augment, voxelise, features and per-voxel targets.
 
 Every training scene, generated or real, goes through the same steps; the augmentations model what
-differs between a rendered scene and a real reconstruction (docs/fidelity.md): point density (a
+differs between a rendered scene and a real reconstruction (experiments/fidelity-log.md): point density (a
 random fraction of the points is kept), floors that are neither flat nor at z = 0 (tilt, height
 shift), sensor noise (jitter), and the usual rotation, mirror and scale.
 """

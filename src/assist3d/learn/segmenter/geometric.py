@@ -1,7 +1,7 @@
 """The non-learned reference: remove the room's planes (floor, walls, ceiling) found by RANSAC, then
 take connected components of what is left (points closer than 6 cm are linked).
 
-It is the baseline row of every table in docs/fidelity.md, and ``assist3d segment --method
+It is the baseline row of every table in experiments/fidelity-log.md, and ``assist3d segment --method
 geometric``. It works on 2 cm voxel centres, so its cost and behaviour do not depend on the scan's
 point density.
 """

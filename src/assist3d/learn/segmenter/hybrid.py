@@ -19,12 +19,12 @@ snapped to superpoints.
 
 The two proposal sources fail in different rooms (the network in sparse rooms whose objects stand
 apart, the components in cluttered ones), and snapping fixes ragged 5 cm boundaries; the measurements
-are in docs/fidelity.md ("Hybrid inference", "Fallback proposals"). ``assist3d probe`` scores the learned
+are in experiments/fidelity-log.md ("Hybrid inference", "Fallback proposals"). ``assist3d probe`` scores the learned
 proposals alone (it measures training data, and the geometric proposals do not depend on it); ``probe
 --hybrid`` scores this recipe too.
 
 Three variants were measured and not adopted, and have left the code (a stability ranking, instances
-linked without the structural planes' voxels, ranking by agreement with the superpoints); docs/fidelity.md
+linked without the structural planes' voxels, ranking by agreement with the superpoints); experiments/fidelity-log.md
 and their experiment folders keep what they did.
 
 Masks may overlap (a component can hold two learned instances without an IoU above 0.5 with
@@ -49,7 +49,7 @@ NMS_IOU = 0.5
 
 
 #: The geometric settings of hybrid inference: the reference's, with each RANSAC plane refit twice to
-#: its inliers, which keeps the components steadier when a scan moves by a millimetre (docs/fidelity.md,
+#: its inliers, which keeps the components steadier when a scan moves by a millimetre (experiments/fidelity-log.md,
 #: "Noisy scans"). The reference row itself (``segment --method geometric``) keeps ``GeometricConfig()``.
 HYBRID_GEOMETRIC = GeometricConfig(refine=2)
 

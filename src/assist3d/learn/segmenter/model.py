@@ -1,6 +1,6 @@
 """The segmenter network: a sparse residual U-Net with a foreground head and a centre-offset head.
 
-PointGroup-style bottom-up design, chosen because it trains on 2 CPU cores (docs/fidelity.md): dense
+PointGroup-style bottom-up design, chosen because it trains on 2 CPU cores (experiments/fidelity-log.md): dense
 per-voxel targets give every voxel a gradient from the first step, where a mask-query decoder
 (Mask3D) needs hundreds of epochs before its masks carry any signal.
 """
@@ -53,7 +53,7 @@ class Segmenter(nn.Module):
 class SegmenterEnsemble(nn.Module):
     """Several trained segmenters as one: the same ``forward`` as :class:`Segmenter`, returning the
     logit of the members' mean foreground probability and their mean offset. Members must share the
-    input features (voxel size and colour use); docs/fidelity.md ("Seed ensembles") measures it."""
+    input features (voxel size and colour use); experiments/fidelity-log.md ("Seed ensembles") measures it."""
 
     PROB_EPS = 1e-6  # keeps the logit of a mean probability of exactly 0 or 1 finite
 

@@ -1,4 +1,4 @@
-"""Where the model shipped inside the package lies (trained on generated data only; docs/fidelity.md)."""
+"""Where the model shipped inside the package lies (trained on generated data only; experiments/fidelity-log.md)."""
 
 from __future__ import annotations
 

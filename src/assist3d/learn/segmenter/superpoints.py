@@ -11,7 +11,7 @@ PCA normals (unoriented: 1 - |n1 . n2|), threshold and minimum size.
 Snapping replaces each predicted mask by the union of the superpoints it covers by more than half:
 a mask's ragged 5 cm voxel boundary moves to the nearest surface crease, and points the network
 left out of a patch it mostly claimed are added. Measured on the dev scans with 28 trained models
-(docs/fidelity.md, "Hybrid inference").
+(experiments/fidelity-log.md, "Hybrid inference").
 
 The merge loop is written out in Python (about 1.5 s per 50,000 voxels on one core before the two
 shortcuts in ``_graph_segments``, which skip only edges that cannot merge): the graph
