@@ -48,3 +48,13 @@ def test_manifest_entry_is_the_listed_subset_in_order():
     entry = scene_entry(marker)
     assert list(entry) == [k for k in MANIFEST_ENTRY_KEYS if k in marker]
     assert "files" not in entry and "vantage_points" not in entry and entry["points"] == 7
+
+
+def test_on_top_group_names_are_built_and_read_in_one_place():
+    from assist3d.core.contracts import group_kind, on_top_group, on_top_support
+
+    g = on_top_group(7)
+    assert g == "on:7" and on_top_support(g) == 7 and group_kind(g) == "obj"
+    assert [on_top_support(x) for x in ("floor", "wall", "on:", "on:x", "on:-1")] == [None] * 5
+    assert on_top_group(None) == "on:None" and on_top_support("on:None") is None and group_kind("on:None") == "obj"
+    assert [group_kind(x) for x in ("floor", "wall", "obj")] == ["floor", "wall", "obj"]

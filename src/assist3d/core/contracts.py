@@ -260,6 +260,33 @@ class Relation:
         return Relation(d["kind"], d.get("target"), tuple(float(v) for v in d.get("value", ())), bool(d.get("hard", False)))
 
 
+#: the group of the objects placed on one support: ``"on:<support instance id>"`` (floor and wall
+#: groups are ``"floor"`` and ``"wall"``). Build and read it only with the three functions below.
+ON_TOP_PREFIX = "on:"
+GroupKind = Literal["floor", "wall", "obj"]
+
+
+def on_top_group(support_id: int | None) -> str:
+    """The group name of the objects placed on instance ``support_id``; None (a support that could not be
+    placed) gives ``"on:None"``, the group its dropped objects carry in ``layout.json``."""
+    return f"{ON_TOP_PREFIX}{None if support_id is None else int(support_id)}"
+
+
+def on_top_support(group: str) -> int | None:
+    """The support's instance id of an on-top group, None for any other group (or a malformed name)."""
+    if not group.startswith(ON_TOP_PREFIX):
+        return None
+    tail = group[len(ON_TOP_PREFIX):]
+    return int(tail) if tail.isdigit() else None
+
+
+def group_kind(group: str) -> GroupKind:
+    """``"floor"``, ``"wall"`` or ``"obj"`` (an on-top group, or ``"obj"`` itself) for a group name."""
+    if group.startswith(ON_TOP_PREFIX) or group == "obj":
+        return "obj"
+    return group  # type: ignore[return-value]
+
+
 @dataclass(frozen=True)
 class PlacedInstance:
     """One object placed in a scene. ``pose`` maps the asset's canonical frame to the world.

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.contracts import SceneLayout
+from ..core.contracts import SceneLayout, group_kind
 from ..core.errors import DataError
 from ..core.fileio import write_bytes_atomic
 from .ply import BACKGROUND_RGB, instance_colors
@@ -88,7 +88,7 @@ def _draw_layout(ax, layout: SceneLayout, coord, instance, palette_rgb) -> None:
         lo, hi = local.min(0), local.max(0)
         corners = np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]]) @ pose[:2, :2].T + pose[:2, 3]
         col = palette_rgb[inst.id] / 255.0
-        kind = "obj" if inst.group.startswith("on:") or inst.group == "obj" else inst.group
+        kind = group_kind(inst.group)
         ax.add_patch(Polygon(corners, closed=True, facecolor=(*col, 0.75), edgecolor="black",
                              linewidth=0.5 if kind == "obj" else 0.8, zorder=3 if kind == "obj" else 2))
         ctr = corners.mean(0)

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..assets.catalog import Catalog
-from ..core.contracts import SceneLayout
+from ..core.contracts import SceneLayout, group_kind
 from ..core.errors import shown
 from ..core.fileio import write_bytes_atomic
 from ..scene.room import opening_segment
@@ -27,10 +27,6 @@ GROUP_STYLE = {  # face colour, edge colour, z-order
     "obj": ("#a1d99b", "#31a354", 4),
 }
 UNKNOWN_SIZE = (0.2, 0.2, 0.2)
-
-
-def _kind(group: str) -> str:
-    return "obj" if group.startswith("on:") or group == "obj" else group
 
 
 def footprint_corners(pose: np.ndarray, size) -> np.ndarray:
@@ -62,8 +58,8 @@ def render_topdown(layout: SceneLayout, catalog: Catalog, path: str | Path, *, t
                 zorder=1)
     counts = {"floor": 0, "wall": 0, "obj": 0}
     parents = {i.parent for i in layout.instances if i.parent is not None}
-    for inst in sorted(layout.instances, key=lambda i: (GROUP_STYLE[_kind(i.group)][2], i.id)):
-        kind = _kind(inst.group)
+    for inst in sorted(layout.instances, key=lambda i: (GROUP_STYLE[group_kind(i.group)][2], i.id)):
+        kind = group_kind(inst.group)
         counts[kind] += 1
         face, edge, z = GROUP_STYLE[kind]
         if inst.asset in catalog:

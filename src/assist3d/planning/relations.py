@@ -15,7 +15,7 @@ from typing import Container, Protocol, Sequence
 
 import numpy as np
 
-from ..core.contracts import AssetRecord, PlacedInstance, Relation, Room
+from ..core.contracts import AssetRecord, PlacedInstance, Relation, Room, on_top_support
 
 
 @dataclass(frozen=True)
@@ -57,7 +57,7 @@ CROSS_GROUP = frozenset({"above", "on"})
 
 def group_kind(group: str) -> str:
     """'floor', 'wall' or 'on' for a group name."""
-    return "on" if group.startswith("on:") else group
+    return "on" if on_top_support(group) is not None else group
 
 
 @dataclass(frozen=True)

@@ -31,7 +31,7 @@ from typing import Callable
 
 from ..assets.catalog import Catalog
 from ..config import GenerateConfig
-from ..core.contracts import AssetRecord, DroppedObject, PlacedInstance, SceneLayout
+from ..core.contracts import AssetRecord, DroppedObject, PlacedInstance, SceneLayout, group_kind, on_top_group
 from ..core.errors import AssistError
 from ..placement import PlacementResult, place_group, place_group_random
 from ..planning.planners import make_planner
@@ -221,7 +221,7 @@ class _Run:
             if not items:
                 continue
             support = None if inst_id is None else next(i for i in self.instances if i.id == inst_id)
-            jobs.append(_OnTopJob(f"on:{inst_id}", items, support))
+            jobs.append(_OnTopJob(on_top_group(inst_id), items, support))
         return jobs
 
     def on_top(self, jobs: list[_OnTopJob], random_mode: bool, workers: int) -> None:
@@ -272,7 +272,7 @@ def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_inde
 
     placed = {g: 0 for g in ("floor", "wall", "obj")}
     for inst in run.instances:
-        placed["obj" if inst.group.startswith("on:") or inst.group == "obj" else inst.group] += 1
+        placed[group_kind(inst.group)] += 1
     stats = {
         "selected": {"floor": len(sel.floor), "wall": len(sel.wall),
                      "obj": sum(map(len, sel.floor_on_top)) + sum(map(len, sel.wall_on_top))},
@@ -306,6 +306,6 @@ def layout_summary(layout: SceneLayout) -> dict:
     """Counts for a one-line report: placed per group, dropped, seconds."""
     placed = {g: 0 for g in ("floor", "wall", "obj")}
     for inst in layout.instances:
-        placed["obj" if inst.group.startswith("on:") or inst.group == "obj" else inst.group] += 1
+        placed[group_kind(inst.group)] += 1
     return {"placed": placed, "instances": len(layout.instances), "dropped": len(layout.dropped),
             "seconds": round(layout.seconds, 3)}
