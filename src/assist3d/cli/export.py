@@ -1,0 +1,34 @@
+"""CLI: ``assist3d export scannet DATA OUT``: a generated dataset in other projects' formats."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import typer
+
+export_app = typer.Typer(help="Write a generated dataset in other projects' formats (docs/ecosystem.md).",
+                         no_args_is_help=True)
+
+
+@export_app.command("scannet")
+def export_scannet_cmd(
+    data: Path = typer.Argument(..., help="A dataset folder written by 'assist3d generate'."),
+    out: Path = typer.Argument(..., help="Output folder: scans/sceneXXXX_YY/, the label map, the split lists."),
+    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON only."),
+) -> None:
+    """Every finished scene as a ScanNet v2 scan (mesh PLY, segments, aggregation, labels PLY), with a
+    scannetv2-labels.combined.tsv and scannetv2_{train,val,test}.txt, for ScanNet preprocessing scripts."""
+    from ..interop.scannet import export_scannet
+
+    def on_scene(scene_id: str, name: str) -> None:
+        if not as_json:
+            typer.echo(f"{scene_id} -> {out / 'scans' / name}", err=True)
+
+    res = export_scannet(data, out, on_scene=on_scene)
+    sys.stdout.write(json.dumps(res) + "\n")
+
+
+def register(app: typer.Typer) -> None:
+    app.add_typer(export_app, name="export")
