@@ -131,3 +131,24 @@ def test_pointcept_module_imports_without_pointcept():
     import assist3d.interop.pointcept as mod
 
     assert mod.DATASETS is None and not hasattr(mod, "Assist3DAgnosticDataset")
+
+
+def test_the_documented_class_table_is_what_the_code_writes():
+    """docs/ecosystem.md's table of the built-in classes names the ScanNet200 and ScanNet-20 class
+    (and index) that :func:`scannet_label` gives each."""
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "ecosystem.md").read_text(encoding="utf-8")
+    section = doc.split("### ScanNet classes of the built-in classes", 1)[1].split("\n## ", 1)[0]
+    rows = [[c.strip() for c in line.strip("|").split("|")] for line in section.splitlines()
+            if line.startswith("| ") and not line.startswith("| class") and not line.startswith("| ---")]
+    seen = set()
+    for name, s200, s20 in rows:
+        if name.startswith("*room: "):
+            lab = surface_label(("wall", "floor", "ceiling").index(name[7:-1]))
+        else:
+            lab = scannet_label(name)
+            seen.add(name)
+        assert s200 == f"{lab.scannet200.name} ({lab.scannet200.index})" + ("" if lab.matched else ", no match"), name
+        assert s20 == (f"{lab.name20} ({lab.index20})" if lab.index20 >= 0 else "none (-1)"), name
+    assert len(seen) >= 150 and {"door", "window", "chair", "air conditioner"} <= seen
