@@ -157,3 +157,26 @@ def test_predictions_through_the_benchmark_text_format_score_the_same_on_the_exp
     ra, rb = json.loads(a.stdout), json.loads(b.stdout)
     keys = ("AP", "AP50", "AP25", "AR", "AR50", "AR25")
     assert 0.3 < ra["AP"] < 1.0 and {k: rb[k] for k in keys} == {k: ra[k] for k in keys}
+
+
+def test_s3dis_export_is_read_back_with_the_same_objects(dataset, tmp_path):
+    out = tmp_path / "s3"
+    res = CliRunner().invoke(app, ["export", "s3dis", str(dataset), str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["areas"] == {"Area_1": 1, "Area_5": 1}  # scene 1 trains, scene 0 validates
+    anno = out / "Area_1" / "scene_000001" / "Annotations"
+    assert sorted(p.name for p in anno.iterdir()) == ["chair_1.txt", "clutter_1.txt", "floor_1.txt", "table_1.txt",
+                                                       "wall_1.txt"]
+    assert (out / "Area_1" / "Area_1_alignmentAngle.txt").read_text().splitlines()[1:] == ["scene_000001 0"]
+    theirs = open_dataset(f"s3dis:{out / 'Area_1'}").load("Area_1_scene_000001")
+    ours = open_dataset(f"assist3d:{dataset}").load("scene_000001")
+
+    def order(c: np.ndarray) -> np.ndarray:
+        r = np.round(c.astype(np.float64), 3)
+        return np.lexsort((r[:, 2], r[:, 1], r[:, 0]))
+
+    a, b = order(theirs.coord), order(ours.coord)
+    assert len(a) == len(b) and np.abs(theirs.coord[a] - ours.coord[b]).max() < 1e-4
+    assert np.array_equal(theirs.color[a], ours.color[b])
+    pairs = np.unique(np.stack([theirs.instance[a], ours.instance[b]], 1), axis=0)
+    assert len(pairs) == len(np.unique(ours.instance)) == len(np.unique(theirs.instance))

@@ -1,4 +1,4 @@
-"""CLI: ``assist3d export scannet DATA OUT``: a generated dataset in other projects' formats."""
+"""CLI: ``assist3d export scannet | s3dis DATA OUT``: a generated dataset in other projects' formats."""
 
 from __future__ import annotations
 
@@ -27,6 +27,24 @@ def export_scannet_cmd(
             typer.echo(f"{scene_id} -> {out / 'scans' / name}", err=True)
 
     res = export_scannet(data, out, on_scene=on_scene)
+    sys.stdout.write(json.dumps(res) + "\n")
+
+
+@export_app.command("s3dis")
+def export_s3dis_cmd(
+    data: Path = typer.Argument(..., help="A dataset folder written by 'assist3d generate'."),
+    out: Path = typer.Argument(..., help="Output folder: Area_1/ (train) and Area_5/ (val) rooms."),
+    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON only."),
+) -> None:
+    """Every finished scene as an S3DIS room: Annotations/<class>_<k>.txt per object and surface, and
+    Area_N_alignmentAngle.txt, for S3DIS preprocessing scripts."""
+    from ..interop.s3dis import export_s3dis
+
+    def on_scene(scene_id: str, folder: str) -> None:
+        if not as_json:
+            typer.echo(f"{scene_id} -> {folder}", err=True)
+
+    res = export_s3dis(data, out, on_scene=on_scene)
     sys.stdout.write(json.dumps(res) + "\n")
 
 
