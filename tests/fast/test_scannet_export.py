@@ -180,3 +180,15 @@ def test_s3dis_export_is_read_back_with_the_same_objects(dataset, tmp_path):
     assert np.array_equal(theirs.color[a], ours.color[b])
     pairs = np.unique(np.stack([theirs.instance[a], ours.instance[b]], 1), axis=0)
     assert len(pairs) == len(np.unique(ours.instance)) == len(np.unique(theirs.instance))
+
+
+@pytest.mark.slow  # starts two worker processes (about 5 s)
+def test_export_with_worker_processes_writes_the_same_bytes(dataset, tmp_path):
+    from assist3d.interop.scannet import export_scannet
+
+    export_scannet(dataset, tmp_path / "one")
+    export_scannet(dataset, tmp_path / "two", workers=2)
+    files = sorted(p.relative_to(tmp_path / "one") for p in (tmp_path / "one").rglob("*") if p.is_file())
+    assert len(files) == 2 * 5 + 5  # five files per scan; label map, three split lists, export.json
+    for rel in files:
+        assert (tmp_path / "one" / rel).read_bytes() == (tmp_path / "two" / rel).read_bytes(), rel

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import typer
 
+from ..core.bounds import MAX_WORKERS
+
 export_app = typer.Typer(help="Write a generated dataset in other projects' formats (docs/ecosystem.md).",
                          no_args_is_help=True)
 
@@ -16,6 +18,8 @@ export_app = typer.Typer(help="Write a generated dataset in other projects' form
 def export_scannet_cmd(
     data: Path = typer.Argument(..., help="A dataset folder written by 'assist3d generate'."),
     out: Path = typer.Argument(..., help="Output folder: scans/sceneXXXX_YY/, the label map, the split lists."),
+    workers: int = typer.Option(1, "--workers", "-w", min=1, max=MAX_WORKERS,
+                                help="Scenes exported at once (processes); about 10 s per scene each."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON only."),
 ) -> None:
     """Every finished scene as a ScanNet v2 scan (mesh PLY, segments, aggregation, labels PLY), with a
@@ -26,7 +30,7 @@ def export_scannet_cmd(
         if not as_json:
             typer.echo(f"{scene_id} -> {out / 'scans' / name}", err=True)
 
-    res = export_scannet(data, out, on_scene=on_scene)
+    res = export_scannet(data, out, workers=workers, on_scene=on_scene)
     sys.stdout.write(json.dumps(res) + "\n")
 
 

@@ -29,6 +29,9 @@ import csv
 import io
 import json
 import logging
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import ExitStack
+from multiprocessing import get_context
 from pathlib import Path
 from typing import Callable
 
@@ -172,11 +175,18 @@ def _label_map(used: dict[str, tuple[ScanNetLabel, int]]) -> str:
     return buf.getvalue()
 
 
-def export_scannet(data: str | Path, out: str | Path, *,
+def _export_one(job: tuple[Path, str, list[str], Path, str]) -> tuple[str, dict[str, tuple[ScanNetLabel, int]]]:
+    data, scene_id, classes, out, name = job
+    _, used = _write_scene(_scene(data, scene_id, classes), out / "scans" / name, name)
+    return name, used
+
+
+def export_scannet(data: str | Path, out: str | Path, *, workers: int = 1,
                    on_scene: Callable[[str, str], None] | None = None) -> dict:
     """Write every finished scene of dataset ``data`` as a ScanNet scan under ``out`` (see the module
-    docstring). ``on_scene(scene_id, name)`` is called after each. Returns a summary (``scenes``,
-    ``splits``, ``labels``, ``out``)."""
+    docstring), ``workers`` scenes at a time (processes; the files do not depend on it).
+    ``on_scene(scene_id, name)`` is called after each. Returns a summary (``scenes``, ``splits``,
+    ``labels``, ``out``)."""
     data, out = Path(data), Path(out)
     fix = "; give a folder written by 'assist3d generate'"
     manifest = read_manifest(data, fix=fix)
@@ -198,15 +208,20 @@ def export_scannet(data: str | Path, out: str | Path, *,
     names: dict[str, str] = {}
     splits: dict[str, list[str]] = {"train": [], "val": [], "test": []}
     used: dict[str, tuple[ScanNetLabel, int]] = {}
-    for index, scene_id in sorted(todo):
-        name = scannet_name(index)
-        _, scene_used = _write_scene(_scene(data, scene_id, classes), out / "scans" / name, name)
-        for label, (lab, n) in scene_used.items():
-            used[label] = (lab, used.get(label, (lab, 0))[1] + n)
-        names[name] = scene_id
-        splits[split_of(index)].append(name)
-        if on_scene is not None:
-            on_scene(scene_id, name)
+    jobs = [(data, scene_id, classes, out, scannet_name(index)) for index, scene_id in sorted(todo)]
+    with ExitStack() as stack:
+        if workers > 1 and len(jobs) > 1:
+            pool = stack.enter_context(ProcessPoolExecutor(min(workers, len(jobs)), mp_context=get_context("spawn")))
+            results = pool.map(_export_one, jobs)
+        else:
+            results = map(_export_one, jobs)
+        for (index, scene_id), (name, scene_used) in zip(sorted(todo), results):
+            for label, (lab, n) in scene_used.items():
+                used[label] = (lab, used.get(label, (lab, 0))[1] + n)
+            names[name] = scene_id
+            splits[split_of(index)].append(name)
+            if on_scene is not None:
+                on_scene(scene_id, name)
     write_text_atomic(out / LABEL_MAP_NAME, _label_map(used))
     for split, listed in splits.items():
         write_text_atomic(out / SPLIT_DIR / f"scannetv2_{split}.txt", "".join(f"{s}\n" for s in listed))
