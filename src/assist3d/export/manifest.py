@@ -22,7 +22,8 @@ from ..core.records import manifest_entry
 
 log = logging.getLogger(__name__)
 
-__all__ = ["MANIFEST_NAME", "SPLIT_FILES", "VAL_EVERY", "split_of", "versions", "scene_entry", "llm_summary", "Manifest", "IGNORED_CONFIG_KEYS", "read_manifest"]
+__all__ = ["MANIFEST_NAME", "SPLIT_FILES", "VAL_EVERY", "split_of", "versions", "scene_entry", "llm_summary",
+           "Manifest", "IGNORED_CONFIG_KEYS", "read_manifest"]
 
 MANIFEST_NAME = "manifest.json"
 #: split name -> the file listing its scenes
@@ -34,6 +35,8 @@ VAL_EVERY = 5
 def split_of(index: int) -> str:
     """The split of the scene with index ``index``: ``"val"`` for every fifth one, else ``"train"``."""
     return "val" if int(index) % VAL_EVERY == 0 else "train"
+
+
 # settings that change speed or extra files, never the arrays: a resume may change them
 IGNORED_CONFIG_KEYS = (("render", "threads"), ("output", "ply"), ("output", "save_mesh"))
 

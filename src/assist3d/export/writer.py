@@ -30,7 +30,7 @@ from .ply import ply_bytes
 
 log = logging.getLogger(__name__)
 
-__all__ = ["ARRAYS", "SCANNET_ARRAYS", "META_NAME", "write_scene", "read_scene_meta", "load_scene_arrays", "file_digest",
+__all__ = ["ARRAYS", "META_NAME", "write_scene", "read_scene_meta", "load_scene_arrays", "file_digest",
            "remove_stale_temps"]
 
 ARRAYS: dict[str, tuple[str, int]] = {  # name -> (dtype, columns; 0 = 1-d)
@@ -40,8 +40,6 @@ ARRAYS: dict[str, tuple[str, int]] = {  # name -> (dtype, columns; 0 = 1-d)
     "instance": ("int32", 0),
     "segment": ("int32", 0),
 }
-#: ScanNet class labels written beside the arrays above (Pointcept's ScanNet datasets read them).
-SCANNET_ARRAYS: dict[str, tuple[str, int]] = {"segment20": ("int32", 0), "segment200": ("int32", 0)}
 META_NAME = "meta.json"
 MARKER_FORMAT = "assist3d-scene"
 
