@@ -38,7 +38,7 @@ def test_scene_folder_loads_like_pointcept_and_marker_lists_every_file(tmp_path)
     assert data["segment"].dtype == np.int32 and data["segment"].shape == (500,)
     assert np.array_equal(data["instance"], s.instance)
     assert set(meta["files"]) == {"coord.npy", "color.npy", "normal.npy", "instance.npy", "segment.npy",
-                                  "layout.json", "points.ply"}
+                                  "segment20.npy", "segment200.npy", "layout.json", "points.ply"}
     assert meta["seconds"]["write"] >= 0 and meta["seconds"]["render"] == 1.0
     assert read_scene_meta(d)["seed"] == 5
     assert SceneLayout.from_json(json.loads((d / "layout.json").read_text())).seed == 5

@@ -1,6 +1,11 @@
 """The dataset-level ``manifest.json``: resolved config, versions, seed, classes and one entry
 per finished scene, rewritten atomically as scenes finish. Scene entries are rebuilt from the
-scenes' own completion markers, so the manifest is always consistent with the folders."""
+scenes' own completion markers, so the manifest is always consistent with the folders.
+
+Beside it, the split lists ``train.json`` and ``val.json``: JSON lists of scene folder names
+(relative to the dataset folder, what Pointcept's ``DefaultDataset`` reads when its ``split`` names a
+file). The rule depends on the scene index alone, so a scene never changes split when a dataset
+grows or is resumed: every fifth scene (index 0, 5, 10, ...) is validation, the others training."""
 
 from __future__ import annotations
 
@@ -17,9 +22,21 @@ from ..core.records import manifest_entry
 
 log = logging.getLogger(__name__)
 
-__all__ = ["MANIFEST_NAME", "versions", "scene_entry", "llm_summary", "Manifest", "IGNORED_CONFIG_KEYS", "read_manifest"]
+__all__ = ["MANIFEST_NAME", "SPLIT_FILES", "VAL_EVERY", "split_of", "versions", "scene_entry", "llm_summary",
+           "Manifest", "IGNORED_CONFIG_KEYS", "read_manifest"]
 
 MANIFEST_NAME = "manifest.json"
+#: split name -> the file listing its scenes
+SPLIT_FILES = {"train": "train.json", "val": "val.json"}
+#: scene index k is a validation scene when k % VAL_EVERY == 0
+VAL_EVERY = 5
+
+
+def split_of(index: int) -> str:
+    """The split of the scene with index ``index``: ``"val"`` for every fifth one, else ``"train"``."""
+    return "val" if int(index) % VAL_EVERY == 0 else "train"
+
+
 # settings that change speed or extra files, never the arrays: a resume may change them
 IGNORED_CONFIG_KEYS = (("render", "threads"), ("output", "ply"), ("output", "save_mesh"))
 
@@ -125,6 +142,9 @@ class Manifest:
     def write(self) -> None:
         self.data["scenes"] = [self._entries[k] for k in sorted(self._entries)]
         self.data["llm"] = llm_summary(self.data["scenes"])
+        for split, name in SPLIT_FILES.items():
+            write_json_atomic(self.root / name, [e["id"] for e in self.data["scenes"]
+                                                 if split_of(e.get("index", 0)) == split])
         write_json_atomic(self.path, self.data)
 
     @property

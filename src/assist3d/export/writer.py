@@ -2,8 +2,10 @@
 
 ``DIR/<scene_id>/`` holds ``coord.npy`` (N, 3) float32, ``color.npy`` (N, 3) uint8,
 ``normal.npy`` (N, 3) float32, ``instance.npy`` (N,) int32 (-1 = background), ``segment.npy``
-(N,) int32 (class index, -1 = background), ``layout.json``, optionally ``points.ply`` and
-``scene.glb``, and last ``meta.json`` with the seed, counts, timings and a hash of every file.
+(N,) int32 (class index, -1 = background), ``segment20.npy`` and ``segment200.npy`` (N,) int32
+(the ScanNet-20 / ScanNet200 class, the room's wall, floor and ceiling included; :mod:`.labels`),
+``layout.json``, optionally ``points.ply`` and ``scene.glb``, and last ``meta.json`` with the
+seed, counts, timings and a hash of every file.
 A folder without a valid ``meta.json`` is incomplete and is regenerated on resume.
 """
 
@@ -23,6 +25,7 @@ from ..core.contracts import PointSample, SceneLayout
 from ..core.errors import DataError
 from ..core.fileio import write_bytes_atomic, write_json_atomic
 from ..core.paths import inside
+from .labels import scannet_segments
 from .ply import ply_bytes
 
 log = logging.getLogger(__name__)
@@ -75,6 +78,10 @@ def write_scene(scene_dir: str | Path, sample: PointSample, layout: SceneLayout,
               "instance": sample.instance, "segment": sample.segment}
     for name, a in arrays.items():
         put(f"{name}.npy", _npy_bytes(a))
+    seg20, seg200 = scannet_segments(sample.coord, sample.normal, sample.instance, sample.segment, layout.classes,
+                                     layout.room.height)
+    put("segment20.npy", _npy_bytes(seg20))
+    put("segment200.npy", _npy_bytes(seg200))
     put("layout.json", (json.dumps(layout.to_json(), indent=1) + "\n").encode("utf-8"))
     if ply:
         put("points.ply", ply_bytes(sample))
