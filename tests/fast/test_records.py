@@ -58,3 +58,18 @@ def test_on_top_group_names_are_built_and_read_in_one_place():
     assert [on_top_support(x) for x in ("floor", "wall", "on:", "on:x", "on:-1")] == [None] * 5
     assert on_top_group(None) == "on:None" and on_top_support("on:None") is None and group_kind("on:None") == "obj"
     assert [group_kind(x) for x in ("floor", "wall", "obj")] == ["floor", "wall", "obj"]
+
+
+def test_layout_stats_are_typed_and_read_and_write_as_the_mapping_they_were():
+    from assist3d.core.contracts import LayoutStats
+
+    raw = {"selected": {"floor": 3, "wall": 1, "obj": 2}, "placed": {"floor": 3, "wall": 1, "obj": 1}, "dropped": 1,
+           "selection": {"draws": 4}, "llm_calls": 2, "cache_hits": 1, "repairs": 0, "placement": {"nodes": 10},
+           "notes": ["a note"], "timing": {"select": 0.1}, "llm_budget_groups": 0, "future_key": [1]}
+    st = LayoutStats.from_json(raw)
+    assert st.placed["obj"] == 1 and st.llm_calls == 2 and st.llm_budget_groups == 0 and st.extra == {"future_key": [1]}
+    assert st.to_json() == raw and list(st.to_json()) == list(raw)  # same keys, same order: layout.json unchanged
+    assert st["notes"] == ["a note"] and st.get("timing") == {"select": 0.1} and "prompt_tokens" not in st
+    assert dict(st) == raw and len(st) == len(raw)
+    empty = LayoutStats()
+    assert empty.prompt_tokens is None and "llm_budget_groups" not in empty.to_json() and empty["dropped"] == 0

@@ -13,7 +13,8 @@ Conventions used everywhere:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field, fields
 from typing import Any, Literal
 
 import numpy as np
@@ -343,6 +344,66 @@ class DroppedObject:
         return {"asset": self.asset, "group": self.group, "reason": self.reason}
 
 
+@dataclass
+class LayoutStats(Mapping[str, Any]):
+    """What a layout run counted (``layout.json``'s ``stats``), typed; it still reads as the mapping it
+    was (``stats["placed"]``, ``stats.get("timing")``), in the same key order.
+
+    ``selected`` / ``placed``: objects per group kind (floor, wall, obj); ``dropped``: objects not placed;
+    ``selection``: the selection stage's counters; ``llm_calls`` / ``cache_hits`` / ``repairs``: the
+    relation planner's; ``placement``: the placement search's counters; ``notes``: what was dropped or
+    fell back, and why (at most ``MAX_NOTES``); ``timing``: wall seconds per stage. Present only when
+    they apply: ``llm_budget_groups`` (groups the rules planned because the LLM budget was spent),
+    ``prompt_tokens`` and ``completion_tokens`` (endpoints that report them). Keys this version does
+    not know, read from a newer file, are kept in ``extra`` and written back after the others."""
+
+    selected: dict[str, int] = field(default_factory=dict)
+    placed: dict[str, int] = field(default_factory=dict)
+    dropped: int = 0
+    selection: dict[str, Any] = field(default_factory=dict)
+    llm_calls: int = 0
+    cache_hits: int = 0
+    repairs: int = 0
+    placement: dict[str, float] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+    timing: dict[str, float] = field(default_factory=dict)
+    llm_budget_groups: int | None = None
+    prompt_tokens: int | None = None
+    completion_tokens: int | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def _pairs(self) -> Iterator[tuple[str, Any]]:
+        for f in fields(self):
+            if f.name == "extra":
+                continue
+            v = getattr(self, f.name)
+            if v is not None or f.default is not None:
+                yield f.name, v
+        yield from self.extra.items()
+
+    def __getitem__(self, key: str) -> Any:
+        for k, v in self._pairs():
+            if k == key:
+                return v
+        raise KeyError(key)
+
+    def __iter__(self) -> Iterator[str]:
+        return (k for k, _ in self._pairs())
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self._pairs())
+
+    def to_json(self) -> dict[str, Any]:
+        return dict(self._pairs())
+
+    @staticmethod
+    def from_json(d: Mapping[str, Any] | None) -> LayoutStats:
+        d = dict(d or {})
+        known = {f.name for f in fields(LayoutStats)} - {"extra"}
+        return LayoutStats(**{k: v for k, v in d.items() if k in known},
+                           extra={k: v for k, v in d.items() if k not in known})
+
+
 @dataclass(frozen=True)
 class SceneLayout:
     """A complete, serialisable scene layout (``layout.json``)."""
@@ -353,7 +414,7 @@ class SceneLayout:
     seed: int
     seconds: float
     planner: dict = field(default_factory=dict)  # {group_name: "rules" | "llm:<model>"}
-    stats: dict = field(default_factory=dict)  # free-form numbers: llm calls, cache hits, ...
+    stats: LayoutStats = field(default_factory=LayoutStats)
     classes: tuple[str, ...] = ()  # class list; instance class index = classes.index(class_name)
 
     def to_json(self) -> dict:
@@ -364,7 +425,7 @@ class SceneLayout:
             "seed": self.seed,
             "seconds": round(self.seconds, 4),
             "planner": dict(self.planner),
-            "stats": dict(self.stats),
+            "stats": self.stats.to_json(),
             "classes": list(self.classes),
         }
 
@@ -377,7 +438,7 @@ class SceneLayout:
             seed=int(d.get("seed", 0)),
             seconds=float(d.get("seconds", 0.0)),
             planner=dict(d.get("planner", {})),
-            stats=dict(d.get("stats", {})),
+            stats=LayoutStats.from_json(d.get("stats")),
             classes=tuple(d.get("classes", [])),
         )
 

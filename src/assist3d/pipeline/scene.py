@@ -87,7 +87,7 @@ class SceneGenerator:
         layout = build_layout(self.catalog, cfg, seed, scene_index=job.index)
         t_layout = time.perf_counter() - t0
         cpu = {"select+layout": time.process_time() - cpu0}
-        seconds.select = float((layout.stats.get("timing") or {}).get("select", 0.0))  # planner, room, selection
+        seconds.select = float(layout.stats.timing.get("select", 0.0))  # planner, room, selection
         seconds.layout = round(t_layout - seconds.select, 4)
         if not layout.classes:
             layout = _with_classes(layout, self.classes)

@@ -31,7 +31,7 @@ from typing import Callable
 
 from ..assets.catalog import Catalog
 from ..config import GenerateConfig
-from ..core.contracts import AssetRecord, DroppedObject, PlacedInstance, SceneLayout, group_kind, on_top_group
+from ..core.contracts import AssetRecord, DroppedObject, LayoutStats, PlacedInstance, SceneLayout, group_kind, on_top_group
 from ..core.errors import AssistError
 from ..placement import PlacementResult, place_group, place_group_random
 from ..planning.planners import make_planner
@@ -273,24 +273,23 @@ def build_layout(catalog: Catalog, cfg: GenerateConfig, seed: int, *, scene_inde
     placed = {g: 0 for g in ("floor", "wall", "obj")}
     for inst in run.instances:
         placed[group_kind(inst.group)] += 1
-    stats = {
-        "selected": {"floor": len(sel.floor), "wall": len(sel.wall),
-                     "obj": sum(map(len, sel.floor_on_top)) + sum(map(len, sel.wall_on_top))},
-        "placed": placed,
-        "dropped": len(run.dropped),
-        "selection": dict(sel.stats),
-        "llm_calls": int(run.plan_stats.get("llm_calls", 0)),
-        "cache_hits": int(run.plan_stats.get("cache_hits", 0)),
-        "repairs": int(run.plan_stats.get("repairs", 0)),
-        "placement": {k: (int(v) if float(v).is_integer() else round(v, 6)) for k, v in sorted(run.place_stats.items())},
-        "notes": run.notes[:MAX_NOTES],
-        "timing": run.timing,
-    }
-    if run.budget_s is not None:
-        stats["llm_budget_groups"] = run.over_budget  # groups the rules planned because the budget was spent
-    for k in ("prompt_tokens", "completion_tokens"):
-        if k in run.plan_stats:
-            stats[k] = int(run.plan_stats[k])
+    stats = LayoutStats(
+        selected={"floor": len(sel.floor), "wall": len(sel.wall),
+                  "obj": sum(map(len, sel.floor_on_top)) + sum(map(len, sel.wall_on_top))},
+        placed=placed,
+        dropped=len(run.dropped),
+        selection=dict(sel.stats),
+        llm_calls=int(run.plan_stats.get("llm_calls", 0)),
+        cache_hits=int(run.plan_stats.get("cache_hits", 0)),
+        repairs=int(run.plan_stats.get("repairs", 0)),
+        placement={k: (int(v) if float(v).is_integer() else round(v, 6)) for k, v in sorted(run.place_stats.items())},
+        notes=run.notes[:MAX_NOTES],
+        timing=run.timing,
+        # groups the rules planned because the LLM budget was spent (only with a budget)
+        llm_budget_groups=run.over_budget if run.budget_s is not None else None,
+        prompt_tokens=int(run.plan_stats["prompt_tokens"]) if "prompt_tokens" in run.plan_stats else None,
+        completion_tokens=int(run.plan_stats["completion_tokens"]) if "completion_tokens" in run.plan_stats else None,
+    )
     if run.plan_stats.get("llm_seconds"):
         run.timing["llm_seconds"] = round(float(run.plan_stats["llm_seconds"]), 4)  # wall time: kept with timings
     if cfg.room.fill_openings:  # its own random stream: every other draw of the scene is unchanged
