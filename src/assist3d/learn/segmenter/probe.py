@@ -51,10 +51,9 @@ from ...core.fileio import write_json_atomic, write_text_atomic
 from .checkpoint import load_segmenter, save_segmenter
 from .config import BEFORE_ADDED, SegmenterConfig, legacy_config
 from .data import Scene
-from .geometric import segment_geometric
-from .hybrid import HYBRID_GEOMETRIC, HybridConfig, segment_hybrid
-from .infer import segment_points
+from .hybrid import HYBRID_GEOMETRIC, HybridConfig
 from .loader import mix_probabilities
+from .predictor import STEPS, Predictor
 from .superpoints import SuperpointConfig
 from .train import Budget, train_segmenter
 
@@ -189,12 +188,13 @@ def _num(x: float) -> float | None:
 
 def evaluate_model(model_path: Path, eval_specs: Sequence[str], pred_dir: Path, *, method: str = "learned",
                    on_scene: Callable[[int, int], None] | None = None) -> dict:
-    """Segment every scene of ``eval_specs`` with ``method`` (``learned``: the network's instances,
-    ``hybrid``: :func:`hybrid.segment_hybrid`, ``geometric``: the non-learned reference, which ignores
-    ``model_path``), write predictions, return metrics with per-scene figures."""
+    """Segment every scene of ``eval_specs`` with the :class:`.predictor.Predictor` of ``method`` (a
+    post-processing step of ``STEPS``: ``learned``, the network's instances; ``hybrid``,
+    :func:`hybrid.segment_hybrid`; ``geometric``, the non-learned reference, which ignores ``model_path``),
+    write predictions, return metrics with per-scene figures."""
     if method not in METHODS:
         raise ValueError(f"method {method!r}: expected one of {', '.join(METHODS)}")
-    loaded = load_segmenter(model_path) if method != "geometric" else None
+    predictor = Predictor(load_segmenter(model_path) if STEPS.get(method).needs_model else None, method)
     datasets = [open_dataset(s) for s in eval_specs]
     total = sum(len(d) for d in datasets)
     matches: list[SceneMatches] = []
@@ -205,12 +205,7 @@ def evaluate_model(model_path: Path, eval_specs: Sequence[str], pred_dir: Path, 
         for sid in ds.scene_ids:
             sample = ds.load(sid)
             t0 = time.perf_counter()
-            if method == "learned":
-                seg = segment_points(loaded.model, loaded.config, sample.coord, sample.color)
-            elif method == "hybrid":
-                seg = segment_hybrid(loaded.model, loaded.config, sample.coord, sample.color)
-            else:
-                seg = segment_geometric(sample.coord)
+            seg = predictor.segment(sample.coord, sample.color, name=sid, where=str(ds.root))
             seconds += time.perf_counter() - t0
             save_predictions(pred_dir / f"{sid}.npz", seg.masks, seg.scores)
             m = match_scene(sample.instance, seg.masks, seg.scores, valid=sample.valid, scene_id=sid)
