@@ -78,6 +78,18 @@ def main() -> None:
         cell = {k: f"{m:.3f} ± {s:.3f} ({', '.join(f'{x:.3f}' for x in v)})" if len(v) > 1
                 else f"{m:.3f} (one seed)" for k, (m, s, v) in figs.items()}
         print(f"| {steps} | {scenes} | {len(seeds)} | {cell['learned']} | {cell['hybrid']} |")
+    shipped = HERE / "shipped" / "hybrid_eval-shipped.json"
+    if shipped.exists():  # the shipped model, measured the same way (scripts/hybrid_eval.py)
+        model = next(iter(json.loads(shipped.read_text())["models"].values()))
+        cells = {}
+        for kind in ("learned", "hybrid"):
+            scans = {s: {"AP50": v["AP50"]} for g in model[kind] for s, v in g["scans"].items()}
+            rm = room_means(scans)
+            cells[kind] = (sum(rm.values()) / len(rm), rm)
+        print(f"| shipped model (821 steps, 60 scenes) | | 1 | {cells['learned'][0]:.3f} | {cells['hybrid'][0]:.3f} |")
+        print()
+        print("Shipped model per room, learned / hybrid: " + ", ".join(
+            f"{r} {cells['learned'][1][r]:.3f}/{cells['hybrid'][1][r]:.3f}" for r in cells["learned"][1]))
     print()
     print("Per room, learned / hybrid AP50, mean over seeds:")
     for (steps, scenes), seeds in sorted(points.items()):
