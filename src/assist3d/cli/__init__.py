@@ -60,8 +60,9 @@ def _register_all() -> None:
     from . import metrics as _metrics
     from . import train as _train
     from . import segment as _segment
+    from . import view as _view
 
-    for mod in (_assets, _scene, _generate, _evaluate, _metrics, _train, _segment):
+    for mod in (_assets, _scene, _generate, _evaluate, _metrics, _train, _segment, _view):
         mod.register(app)
 
 

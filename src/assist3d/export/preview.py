@@ -21,7 +21,7 @@ from ..core.fileio import write_bytes_atomic
 from .ply import BACKGROUND_RGB, instance_colors
 from .writer import load_scene_arrays
 
-__all__ = ["render_preview", "find_scene_dir"]
+__all__ = ["render_preview", "find_scene_dir", "beside_dataset"]
 
 MAX_POINTS = 120_000
 
@@ -41,6 +41,21 @@ def find_scene_dir(path: str | Path, scene: str | None = None) -> Path:
     if not scenes:
         raise DataError(f"{p}: no scene folders with coord.npy found")
     return scenes[0]
+
+
+def beside_dataset(path: str | Path, scene: str, suffix: str) -> Path:
+    """A file for scene ``scene`` next to, never inside, the dataset that ``path`` names (a dataset
+    folder, or a scene folder in one): ``<dataset>_<scene><suffix>`` beside the dataset folder; for a
+    scene folder outside any dataset, ``<scene><suffix>`` beside it. Tools that read the dataset
+    then never meet a stray file in it."""
+    p = Path(path)
+    if p.name in ("", ".", ".."):
+        p = p.resolve()
+    if (p / "coord.npy").is_file():
+        if not (p.parent / "manifest.json").is_file():
+            return p.parent / f"{scene}{suffix}"
+        p = p.parent if p.parent.name not in ("", ".", "..") else p.parent.resolve()
+    return p.parent / f"{p.name}_{scene}{suffix}"
 
 
 def _view_basis(azim_deg: float, elev_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
