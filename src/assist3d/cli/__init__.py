@@ -61,8 +61,9 @@ def _register_all() -> None:
     from . import train as _train
     from . import segment as _segment
     from . import view as _view
+    from . import export as _export
 
-    for mod in (_assets, _scene, _generate, _evaluate, _metrics, _train, _segment, _view):
+    for mod in (_assets, _scene, _generate, _evaluate, _metrics, _train, _segment, _view, _export):
         mod.register(app)
 
 
