@@ -30,8 +30,8 @@ setup-full: $(VENV)/.full
 
 demo: $(VENV)/.core
 	$(BIN)/assist3d generate --out $(OUT) --num-scenes 4 --seed 0
-	$(BIN)/assist3d show $(OUT) --out $(OUT)/preview.png
-	@echo "dataset in $(OUT)/, picture of the first scene in $(OUT)/preview.png"
+	$(BIN)/assist3d show $(OUT) --out $(OUT)_preview.png
+	@echo "dataset in $(OUT)/, picture of the first scene beside it in $(OUT)_preview.png"
 
 test: $(VENV)/.full
 	$(BIN)/python -m pytest -q -m "not acceptance"
@@ -43,4 +43,4 @@ bench: $(VENV)/.core
 	$(BIN)/assist3d bench
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache
+	rm -rf $(VENV) $(OUT) $(OUT)_preview.png .pytest_cache

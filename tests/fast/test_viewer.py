@@ -314,6 +314,12 @@ def test_the_page_in_a_headless_browser(tmp_path):
         third = shot()
         assert (np.abs(third - second).sum(axis=2) > 30).mean() > 0.02
         assert b.evaluate("document.getElementById('titles').className") == "on"
+        # one camera: turning the ground-truth pane turns the prediction pane with it
+        b.evaluate("Plotly.relayout(document.getElementById('plot'), {'scene.camera': {eye: {x: 0.4, y: -1.9, z: 0.9},"
+                   " up: {x: 0, y: 0, z: 1}, center: {x: 0, y: 0, z: 0}}}).then(() => true)", timeout=180)
+        b.wait_for("(() => { const c = document.getElementById('plot').layout.scene2.camera;"
+                   " return !!c && Math.abs(c.eye.x - 0.4) < 1e-9 && Math.abs(c.eye.y + 1.9) < 1e-9; })()", timeout=180)
+        third = shot()
 
         # hover over painted pixels until the page names a point (both panes name both labellings)
         ys, xs = np.nonzero((np.abs(third - third[5, 5]).sum(axis=2) > 60))
