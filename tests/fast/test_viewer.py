@@ -341,3 +341,14 @@ def test_the_page_in_a_headless_browser(tmp_path):
     assert b.console_errors == [] and b.exceptions == []
     assert all(u.startswith("file:") for u in b.requests), b.requests  # no network at view time
     print(f"300k points: ready {loaded:.1f} s, draws {timings['drawMs']} ms (headless, software WebGL)")
+
+
+@plotly_missing
+def test_the_real_scan_opens_with_its_labels(real_scan_path, tmp_path):
+    v = load_view(str(real_scan_path))
+    raw = np.load(real_scan_path)
+    assert len(v) == len(raw) == 107_046 and np.allclose(v.coord, raw[:, :3])
+    objects = np.unique(v.instance[v.instance >= 0])
+    assert 10 <= len(objects) <= 46 and v.class_names[v.klass[v.instance >= 0][0]] != "wall"
+    d = _payload(page_html(v))
+    assert d["n"] == 107_046 and d["color"] == "instance" and d["classNames"][0] == "wall"
