@@ -21,7 +21,7 @@ from ..core.fileio import write_bytes_atomic
 from .ply import BACKGROUND_RGB, instance_colors
 from .writer import load_scene_arrays
 
-__all__ = ["render_preview", "find_scene_dir", "beside_dataset"]
+__all__ = ["render_preview", "find_scene_dir", "beside_dataset", "place_labels"]
 
 MAX_POINTS = 120_000
 
