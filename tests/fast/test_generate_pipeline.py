@@ -120,6 +120,35 @@ def test_resume_skips_complete_scenes_and_redoes_broken_ones(full_run, tmp_path)
     assert dataset_bytes(copy) == dataset_bytes(out)
 
 
+def test_ply_on_a_finished_dataset_exports_what_is_missing_and_says_why_not_for_meshes(full_run, tmp_path, caplog):
+    """`generate --ply` (and --save-mesh) again on a dataset made without them: every kept scene gets its
+    points.ply, listed in its marker, the arrays untouched; the mesh, which only generation can write,
+    is named as missing and why."""
+    import logging
+    import shutil
+
+    from assist3d.export import ply_bytes
+    from assist3d.export.writer import scene_sample
+
+    out, _ = full_run
+    copy = tmp_path / "copy"
+    shutil.copytree(out, copy)
+    assert not list(copy.rglob("points.ply"))
+    cfg = parse_config({**TINY, "output": {"ply": True, "save_mesh": True}})
+    with caplog.at_level(logging.INFO, logger="assist3d"):
+        run = generate_dataset(cfg, copy, range(3))
+    assert run.skipped == [0, 1, 2] and run.generated == [] and run.exported == [scene_name(i) for i in range(3)]
+    for i in range(3):
+        d = copy / scene_name(i)
+        assert (d / "points.ply").read_bytes() == ply_bytes(scene_sample(out / scene_name(i)))
+        assert "points.ply" in read_scene_meta(d)["files"]
+    assert dataset_bytes(copy) == dataset_bytes(out)
+    assert "wrote points.ply for 3 kept scenes" in caplog.text
+    assert "3 kept scenes (scene_000000, scene_000001, scene_000002) have no scene.glb" in caplog.text
+    again = generate_dataset(cfg, copy, range(3))  # nothing left to add
+    assert again.exported == [] and again.skipped == [0, 1, 2]
+
+
 def test_other_settings_in_the_same_folder_are_refused(full_run):
     out, _ = full_run
     from assist3d.core.errors import DataError
@@ -166,10 +195,21 @@ def test_generate_show_and_bench_commands(full_run, tmp_path):
     assert summary["generated"] == 1 and summary["failed_checks"] == []
     assert (out / "scene_000001" / "points.ply").is_file()
     assert scene_bytes(out / "scene_000001") == scene_bytes(full_run[0] / "scene_000001")
+    from assist3d.export.writer import export_scene_ply
+
+    later = tmp_path / "later"  # the PLY added to a finished scene is the one generation writes
+    import shutil
+
+    shutil.copytree(full_run[0] / "scene_000001", later / "scene_000001")
+    assert export_scene_ply(later / "scene_000001")
+    assert (later / "scene_000001" / "points.ply").read_bytes() == (out / "scene_000001" / "points.ply").read_bytes()
     png = tmp_path / "p.png"
     res = runner.invoke(app, ["show", str(out), "--out", str(png)])
     assert res.exit_code == 0, res.output
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
+    res = runner.invoke(app, ["show", str(out)])  # not told where: beside the dataset
+    assert res.exit_code == 0 and res.stdout.strip() == str(tmp_path / "cli_scene_000001_preview.png")
+    assert not list(out.rglob("*.png"))
     bench = run_benchmark(scenes=2, cfg=parse_config(TINY))
     assert set(bench) >= {"scenes", "seconds_per_scene", "stages", "peak_memory_mb"}
     assert set(bench["seconds_per_scene"]) == {"median", "max"}

@@ -978,6 +978,16 @@ def test_predictor_segments_a_scan_from_python_and_takes_a_registered_step(tmp_p
         rows = list(segment_scan(str(tmp_path / "toy.npy"), tmp_path / "out", Predictor.load(method="halves"), png=True))
         assert [r["instances"] for r in rows] == [2] and rows[0]["scene"] == "toy"
         assert {p.name for p in (tmp_path / "out").iterdir()} == {"toy.npz", "toy.ply", "toy.png"}
+        assert rows[0]["files"] == [str(tmp_path / "out" / f"toy.{ext}") for ext in ("npz", "ply", "png")]
+        # the PLY names each point's instance (the mask holding it, -1 for none) beside its colour
+        from assist3d.bench.data.ply import read_ply
+
+        vertex = read_ply(tmp_path / "out" / "toy.ply").vertex
+        with np.load(tmp_path / "out" / "toy.npz") as z:
+            masks = z["masks"]
+        expect = np.where(masks.any(0), masks.argmax(0), -1)
+        assert vertex.dtype["instance"] == np.dtype("<i4") and np.array_equal(vertex["instance"], expect)
+        assert set(vertex["instance"].tolist()) == {0, 1} and {"red", "green", "blue"} <= set(vertex.dtype.names)
     finally:
         STEPS.remove("halves")
     with pytest.raises(ConfigError, match="did you mean 'hybrid'"):

@@ -60,9 +60,10 @@ def _register_all() -> None:
     from . import metrics as _metrics
     from . import train as _train
     from . import segment as _segment
+    from . import view as _view
     from . import export as _export
 
-    for mod in (_assets, _scene, _generate, _evaluate, _metrics, _train, _segment, _export):
+    for mod in (_assets, _scene, _generate, _evaluate, _metrics, _train, _segment, _view, _export):
         mod.register(app)
 
 

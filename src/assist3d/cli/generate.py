@@ -77,7 +77,8 @@ def register(app: typer.Typer) -> None:
         preset: Optional[str] = typer.Option(None, "--preset", help="Generator preset (assist3d, randomrooms, "
                                                                       "holodeck-style, no-context, mesh-sampled, ...)."),
         save_mesh: bool = typer.Option(False, "--save-mesh", help="Also write each scene's scene.glb."),
-        ply: bool = typer.Option(False, "--ply", help="Also write points.ply coloured by instance."),
+        ply: bool = typer.Option(False, "--ply", help="Also write points.ply coloured by instance (kept scenes of "
+                                                      "an earlier run get theirs too)."),
         llm_base_url: Optional[str] = typer.Option(None, "--llm-base-url", help="OpenAI-compatible endpoint."),
         llm_model: Optional[str] = typer.Option(None, "--llm-model", help="LLM model name."),
         only: Optional[List[int]] = typer.Option(None, "--only", help="Generate only scene K (repeatable)."),
@@ -144,9 +145,12 @@ def register(app: typer.Typer) -> None:
             sys.stdout.write(json.dumps({
                 "out": str(out), "scenes": len(indices), "generated": len(run.generated), "skipped": len(run.skipped),
                 "stages": _stage_means(run.generated), "failed_checks": run.failed_checks,
-                "errors": run.errors, **({"cluster": run.cluster} if run.cluster else {})}) + "\n")
+                "errors": run.errors, "exported_ply": run.exported,
+                **({"cluster": run.cluster} if run.cluster else {})}) + "\n")
         else:
             _summary_table(run, Console())
+            if run.exported:
+                Console().print(f"--ply: wrote points.ply for {len(run.exported)} kept scene(s) generated without it")
             if run.cluster:
                 c = run.cluster
                 nodes = ", ".join(f"{n} {v['scenes']} ({v['scenes_per_minute']}/min)" for n, v in c["per_node"].items())
@@ -163,14 +167,16 @@ def register(app: typer.Typer) -> None:
     @app.command()
     def show(
         path: Path = typer.Argument(..., help="A scene folder or a dataset folder (its first scene)."),
-        out: Optional[Path] = typer.Option(None, "--out", "-o", help="PNG to write (default: <scene>/preview.png)."),
+        out: Optional[Path] = typer.Option(None, "--out", "-o", help="PNG to write (default: "
+                                           "<dataset>_<scene>_preview.png beside the dataset folder, never "
+                                           "inside it)."),
         scene: Optional[str] = typer.Option(None, "--scene", help="Scene id inside a dataset folder."),
     ) -> None:
         """Picture a generated scene: top-down layout and the cloud coloured by instance."""
-        from ..export.preview import find_scene_dir, render_preview
+        from ..export.preview import beside_dataset, find_scene_dir, render_preview
 
         d = find_scene_dir(path, scene)
-        png = render_preview(d, out or d / "preview.png")
+        png = render_preview(d, out or beside_dataset(path, d.name, "_preview.png"))
         typer.echo(str(png))
 
     @app.command()

@@ -200,7 +200,8 @@ def probe_cmd(
 
 def segment_cmd(
     input_: str = typer.Argument(..., metavar="INPUT", help="a .ply (mesh or point cloud), an (N, 3|6|8) .npy, or FORMAT:PATH"),
-    out: Path = typer.Option(..., "--out", "-o", help="output folder: <scene_id>.npz (masks, scores) and <scene_id>.ply"),
+    out: Path = typer.Option(..., "--out", "-o", help="output folder: <scene_id>.npz (masks, scores) and <scene_id>.ply "
+                             "(points coloured by instance, with an 'instance' vertex property)"),
     checkpoint: Optional[list[Path]] = typer.Option(None, "--checkpoint", help="a trained segmenter (default: the shipped "
                                                     "model); repeat it to average several models' outputs (an ensemble)"),
     method: str = typer.Option("hybrid", "--method", help="hybrid (the model's instances and the geometric components, "
@@ -210,7 +211,8 @@ def segment_cmd(
     tta: bool = typer.Option(False, "--tta", help="average the network over 8 turned and mirrored copies of the scan "
                              "(8x the network's time; measured in experiments/fidelity-log.md, off by default)"),
     png: bool = typer.Option(False, "--png", help="also write <scene_id>.png, a top view coloured by instance"),
-    as_json: bool = typer.Option(False, "--json", help="print one JSON line per scene (instances, seconds, AP when GT is known)"),
+    as_json: bool = typer.Option(False, "--json", help="print one JSON line per scene (instances, seconds, the files "
+                                 "written, AP when GT is known)"),
     threads: int = typer.Option(0, "--threads", min=0, max=256, help="torch CPU threads (0 = all cores)"),
     up_axis: str = typer.Option("z", "--up-axis", help="the scan's up axis: z (ScanNet, ScanNet++, S3DIS), y (many "
                                 "mesh exports), -y, x, -x or -z; the scan is turned to z up for the model; the masks, "
@@ -238,4 +240,4 @@ def segment_cmd(
         else:
             extra = "".join(f"  {k} {row[k]:.3f}" for k in ("AP", "AP50", "AP25") if k in row)
             typer.echo(f"{shown(row['scene'])}: {row['instances']} instances in {row['seconds']:.1f} s{extra} -> "
-                       f"{shown(out / row['scene'], 400)}.npz, .ply")
+                       + ", ".join(shown(f, 400) for f in row["files"]))

@@ -21,7 +21,7 @@ from ..core.fileio import write_bytes_atomic
 from .ply import BACKGROUND_RGB, instance_colors
 from .writer import load_scene_arrays
 
-__all__ = ["render_preview", "find_scene_dir"]
+__all__ = ["render_preview", "find_scene_dir", "beside_dataset", "place_labels"]
 
 MAX_POINTS = 120_000
 
@@ -41,6 +41,21 @@ def find_scene_dir(path: str | Path, scene: str | None = None) -> Path:
     if not scenes:
         raise DataError(f"{p}: no scene folders with coord.npy found")
     return scenes[0]
+
+
+def beside_dataset(path: str | Path, scene: str, suffix: str) -> Path:
+    """A file for scene ``scene`` next to, never inside, the dataset that ``path`` names (a dataset
+    folder, or a scene folder in one): ``<dataset>_<scene><suffix>`` beside the dataset folder; for a
+    scene folder outside any dataset, ``<scene><suffix>`` beside it. Tools that read the dataset
+    then never meet a stray file in it."""
+    p = Path(path)
+    if p.name in ("", ".", ".."):
+        p = p.resolve()
+    if (p / "coord.npy").is_file():
+        if not (p.parent / "manifest.json").is_file():
+            return p.parent / f"{scene}{suffix}"
+        p = p.parent if p.parent.name not in ("", ".", "..") else p.parent.resolve()
+    return p.parent / f"{p.name}_{scene}{suffix}"
 
 
 def _view_basis(azim_deg: float, elev_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -64,7 +79,8 @@ def _draw_cloud(ax, coord, normal, rgb, azim: float, elev: float, title: str) ->
     ax.axis("off")
 
 
-def _draw_layout(ax, layout: SceneLayout, coord, instance, palette_rgb) -> None:
+def _draw_layout(ax, layout: SceneLayout, coord, instance, palette_rgb) -> list[tuple[float, float, str, float]]:
+    """Draw the room and the objects' footprints; returns the labels to place, (x, y, text, area)."""
     from matplotlib.patches import FancyArrow, Polygon
 
     room = np.asarray(layout.room.polygon, dtype=np.float64)
@@ -79,6 +95,7 @@ def _draw_layout(ax, layout: SceneLayout, coord, instance, palette_rgb) -> None:
     ids, starts = np.unique(instance[order], return_index=True)
     bounds = np.r_[starts, len(order)]
     by_id = {int(i): order[bounds[k]:bounds[k + 1]] for k, i in enumerate(ids) if i >= 0}
+    labels: list[tuple[float, float, str, float]] = []
     for inst in sorted(layout.instances, key=lambda i: (i.pose[2, 3], i.id)):  # low objects first
         pts = by_id.get(inst.id)
         if pts is None or len(pts) < 3:
@@ -98,13 +115,48 @@ def _draw_layout(ax, layout: SceneLayout, coord, instance, palette_rgb) -> None:
             ax.add_patch(FancyArrow(ctr[0], ctr[1], front[0] * ln, front[1] * ln, width=0.015, head_width=0.08,
                                     color="black", zorder=4, length_includes_head=True))
         if kind != "obj":
-            ax.text(ctr[0], ctr[1], inst.class_name[:14], fontsize=5, ha="center", va="center", zorder=5)
+            labels.append((float(ctr[0]), float(ctr[1]), inst.class_name[:14], float(np.prod(hi - lo))))
     lo, hi = room.min(0), room.max(0)
     ax.set_xlim(lo[0] - 0.3, hi[0] + 0.3)
     ax.set_ylim(lo[1] - 0.3, hi[1] + 0.3)
     ax.set_aspect("equal")
     ax.set_title("layout (from points; arrows = fronts)", fontsize=9)
     ax.tick_params(labelsize=6)
+    return labels
+
+
+#: where a label may go, in points from its object's centre: on it first, then ever further around it
+_LABEL_OFFSETS = ((0, 0), (0, 7), (0, -7), (12, 0), (-12, 0), (0, 14), (0, -14), (16, 8), (-16, 8), (16, -8),
+                  (-16, -8), (0, 21), (0, -21), (24, 0), (-24, 0))
+
+
+def place_labels(ax, labels, renderer, *, fontsize: float = 6.0) -> tuple[list, int]:
+    """Write ``labels`` ((x, y, text, priority) in data coordinates) on ``ax`` so that no two overlap
+    and none leaves the axes: the highest priority first, each at its point or the first free spot of
+    :data:`_LABEL_OFFSETS` around it; a label with no free spot is left out. Call it once the figure's
+    layout is final. Returns (the Text artists written, how many labels were left out)."""
+    from matplotlib.transforms import ScaledTranslation
+
+    fig = ax.figure
+    frame = ax.get_window_extent(renderer)
+    taken: list = []
+    written: list = []
+    left_out = 0
+    for x, y, text, _ in sorted(labels, key=lambda lab: (-lab[3], lab[2])):
+        t = ax.text(x, y, text, fontsize=fontsize, ha="center", va="center", zorder=5,
+                    bbox={"boxstyle": "square,pad=0.1", "facecolor": "white", "edgecolor": "none", "alpha": 0.75})
+        for dx, dy in _LABEL_OFFSETS:
+            t.set_transform(ax.transData + ScaledTranslation(dx / 72, dy / 72, fig.dpi_scale_trans))
+            box = t.get_window_extent(renderer).expanded(1.06, 1.25)  # the white box around the text
+            inside = (box.x0 >= frame.x0 and box.x1 <= frame.x1 and box.y0 >= frame.y0 and box.y1 <= frame.y1)
+            if inside and not any(box.overlaps(b) for b in taken):
+                taken.append(box)
+                written.append(t)
+                break
+        else:
+            t.remove()
+            left_out += 1
+    return written, left_out
 
 
 def render_preview(scene_dir: str | Path, out_png: str | Path, *, seed: int = 0) -> Path:
@@ -134,7 +186,7 @@ def render_preview(scene_dir: str | Path, out_png: str | Path, *, seed: int = 0)
     fig = Figure(figsize=(15, 9.6), dpi=110)
     FigureCanvasAgg(fig)
     axes = fig.subplots(2, 3)
-    _draw_layout(axes[0, 0], layout, coord, instance, palette)
+    labels = _draw_layout(axes[0, 0], layout, coord, instance, palette)
     s = idx
     _draw_cloud(axes[0, 1], coord[s], normal[s], color[s], 35, 50, "rendered colour, cut-away view")
     _draw_cloud(axes[0, 2], coord[s], normal[s], inst_rgb[s], 35, 50, "instances, cut-away view")
@@ -145,6 +197,12 @@ def render_preview(scene_dir: str | Path, out_png: str | Path, *, seed: int = 0)
     fig.suptitle(f"{d.name}: {len(layout.instances)} objects placed, {n_inst} with points, {n:,} points "
                  f"(grey = background)", fontsize=12)
     fig.tight_layout(rect=(0, 0, 1, 0.97))
+    renderer = fig.canvas.get_renderer()
+    axes[0, 0].apply_aspect()
+    _, left_out = place_labels(axes[0, 0], labels, renderer)
+    if left_out:
+        axes[0, 0].set_title(f"layout (from points; arrows = fronts)\n{left_out} of {len(labels)} labels left out "
+                             "where they would overlap", fontsize=9)
     buf = io.BytesIO()
     fig.savefig(buf, format="png")
     out = Path(out_png)

@@ -31,7 +31,7 @@ from .ply import ply_bytes
 log = logging.getLogger(__name__)
 
 __all__ = ["ARRAYS", "META_NAME", "write_scene", "read_scene_meta", "load_scene_arrays", "file_digest",
-           "remove_stale_temps"]
+           "remove_stale_temps", "scene_sample", "export_scene_ply"]
 
 ARRAYS: dict[str, tuple[str, int]] = {  # name -> (dtype, columns; 0 = 1-d)
     "coord": ("float32", 3),
@@ -148,3 +148,30 @@ def load_scene_arrays(scene_dir: str | Path) -> dict[str, np.ndarray]:
     if len(n) != 1:
         raise DataError(f"{d}: arrays disagree on the point count: { {k: len(v) for k, v in out.items()} }")
     return out
+
+
+def scene_sample(scene_dir: str | Path) -> PointSample:
+    """A scene folder's arrays as a :class:`PointSample` (every point valid), checked like
+    :func:`load_scene_arrays`."""
+    d = Path(scene_dir)
+    a = load_scene_arrays(d)
+    return PointSample(d.name, a["coord"], a["color"], a["normal"], a["instance"], a["segment"],
+                       np.ones(len(a["coord"]), bool))
+
+
+def export_scene_ply(scene_dir: str | Path) -> bool:
+    """Write a finished scene's ``points.ply`` from its arrays (the bytes ``generate --ply`` writes) and
+    list it in the scene's ``meta.json``; False, writing nothing, when the marker lists it already.
+    A scene without a valid marker (unfinished or changed) is refused with a :class:`DataError`."""
+    d = Path(scene_dir)
+    meta = read_scene_meta(d)
+    if meta is None:
+        raise DataError(f"{d}: not a finished scene (no valid {META_NAME}, or a file it lists is missing or "
+                        "changed); re-run `assist3d generate` to complete it")
+    if "points.ply" in meta["files"]:
+        return False
+    data = ply_bytes(scene_sample(d))
+    write_bytes_atomic(d / "points.ply", data)
+    meta["files"]["points.ply"] = {"bytes": len(data), "blake2b": file_digest(data)}
+    write_json_atomic(d / META_NAME, meta)
+    return True

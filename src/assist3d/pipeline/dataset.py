@@ -19,7 +19,7 @@ import tempfile
 import time
 from concurrent.futures import FIRST_COMPLETED, wait
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
@@ -29,7 +29,7 @@ from ..core.bounds import MAX_WORKERS, check_render_memory, check_scene_indices
 from ..config import GenerateConfig, config_to_dict, dump_config, parse_config
 from ..core.errors import AssistError, ConfigError, DataError, FaultError, describe_os_error, fault_advice, shown
 from ..export import Manifest, read_scene_meta
-from ..export.writer import remove_stale_temps
+from ..export.writer import export_scene_ply, remove_stale_temps
 from ..core.interrupts import Interrupted, worker_pool
 from ..core.records import STAGES, stage_timings
 from ..core.rng import scene_seed
@@ -91,6 +91,7 @@ class DatasetRun:
     failed_checks: list[str]
     errors: list[str]  # scenes that raised an AssistError (not written; a re-run retries them)
     cluster: dict | None = None  # --backend ray: nodes, scenes per node, throughput (ray_backend.ClusterStats)
+    exported: list[str] = field(default_factory=list)  # kept scenes given the points.ply they lacked (--ply)
 
 
 LOCK_NAME = ".generate.lock"
@@ -225,6 +226,7 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
                 todo.append(i)
         if skipped:
             log.info("resume: %d of %d scenes already complete in %s", len(skipped), len(indices), out)
+        exported = _complete_kept_scenes(cfg, out, skipped)
         manifest.write()
         if on_start:
             on_start(len(indices), len(skipped))
@@ -270,7 +272,27 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
         finally:
             if backend == "ray":
                 ray_backend.disconnect()
-        return DatasetRun(out, indices, skipped, generated, manifest, failed, errors, cluster)
+        return DatasetRun(out, indices, skipped, generated, manifest, failed, errors, cluster, exported)
+
+
+def _complete_kept_scenes(cfg: GenerateConfig, out: Path, kept: list[int]) -> list[str]:
+    """The extra files a resumed run asks for, for the scenes it keeps: ``output.ply`` writes the
+    missing ``points.ply`` from the arrays (the bytes a fresh run writes); ``output.save_mesh`` cannot
+    (the mesh is assembled while a scene is generated) and says so. Returns the scenes given a PLY."""
+    exported: list[str] = []
+    if cfg.output.ply:
+        exported = [scene_name(i) for i in kept if export_scene_ply(out / scene_name(i))]
+        if exported:
+            log.info("--ply: wrote points.ply for %d kept scene%s generated without it", len(exported),
+                     "s" if len(exported) > 1 else "")
+    if cfg.output.save_mesh:
+        lacking = [scene_name(i) for i in kept if not (out / scene_name(i) / "scene.glb").is_file()]
+        if lacking:
+            log.warning("--save-mesh: %d kept scene%s (%s%s) have no scene.glb and get none: the mesh is only "
+                        "written while a scene is generated; delete those scene folders, or use another --out, "
+                        "to generate them with it", len(lacking), "s" if len(lacking) > 1 else "",
+                        ", ".join(lacking[:3]), ", ..." if len(lacking) > 3 else "")
+    return exported
 
 
 def _run_in_process(gen: SceneGenerator, jobs: list[SceneJob], done: Callable[[dict], None],

@@ -285,12 +285,16 @@ def vertex_normals(coord: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return normals.astype(np.float32)
 
 
-def write_ply(path: str | Path, coord: np.ndarray, color: np.ndarray | None = None, faces: np.ndarray | None = None) -> None:
-    """Write a binary little-endian PLY (ScanNet's property names: x y z, red green blue alpha)."""
+def write_ply(path: str | Path, coord: np.ndarray, color: np.ndarray | None = None, faces: np.ndarray | None = None,
+              *, instance: np.ndarray | None = None) -> None:
+    """Write a binary little-endian PLY (ScanNet's property names: x y z, red green blue alpha) and,
+    with ``instance`` (N,), each vertex's instance id as an ``int instance`` property after them."""
     n = len(coord)
     fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")]
     if color is not None:
         fields += [("red", "u1"), ("green", "u1"), ("blue", "u1"), ("alpha", "u1")]
+    if instance is not None:
+        fields += [("instance", "<i4")]
     v = np.zeros(n, dtype=fields)
     v["x"], v["y"], v["z"] = coord[:, 0], coord[:, 1], coord[:, 2]
     header = ["ply", "format binary_little_endian 1.0", f"element vertex {n}",
@@ -298,6 +302,11 @@ def write_ply(path: str | Path, coord: np.ndarray, color: np.ndarray | None = No
     if color is not None:
         v["red"], v["green"], v["blue"], v["alpha"] = color[:, 0], color[:, 1], color[:, 2], 255
         header += ["property uchar red", "property uchar green", "property uchar blue", "property uchar alpha"]
+    if instance is not None:
+        if len(instance) != n:
+            raise ValueError(f"instance: {len(instance)} values for {n} vertices")
+        v["instance"] = instance
+        header += ["property int instance"]
     body = v.tobytes()
     if faces is not None:
         header += [f"element face {len(faces)}", "property list uchar int vertex_indices"]

@@ -196,9 +196,11 @@ def scan_inputs(spec: str) -> Iterator[ScanFile]:
 def segment_scan(spec: str, out: str | Path, predictor: Predictor, *, png: bool = False, up_axis: str = "z",
                  units: str = "m") -> Iterator[dict]:
     """Segment every scan of ``spec`` (a file or ``FORMAT:PATH``) into ``out``: ``<scene_id>.npz``
-    (masks over the input points, scores), ``<scene_id>.ply`` (the points coloured by instance) and,
-    with ``png``, a top view. Yields one row a scan: ``scene, points, instances, seconds, npz`` and,
-    where the scan has ground truth, ``AP, AP50, AP25, AR`` (ScanNet protocol)."""
+    (masks over the input points, scores), ``<scene_id>.ply`` (the points coloured by instance, each
+    vertex's instance index in an ``instance`` property, -1 = none) and, with ``png``, a top view.
+    Yields one row a scan: ``scene, points, instances, seconds, npz, ply`` (``png`` too), ``files`` (every
+    file written, in order) and, where the scan has ground truth, ``AP, AP50, AP25, AR`` (ScanNet
+    protocol)."""
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise DataError(f"{out}: exists and is not a folder")
@@ -210,14 +212,17 @@ def segment_scan(spec: str, out: str | Path, predictor: Predictor, *, png: bool 
         seg = predictor.segment(coord, scan.color, up_axis=up_axis, units=units, name=scene_id, where=spec)
         seconds = time.perf_counter() - t0
         out.mkdir(parents=True, exist_ok=True)
-        save_predictions(out / f"{scene_id}.npz", seg.masks, seg.scores)
+        files = {"npz": out / f"{scene_id}.npz", "ply": out / f"{scene_id}.ply"}
+        save_predictions(files["npz"], seg.masks, seg.scores)
         colors = instance_colors(seg.labels)
-        write_ply(out / f"{scene_id}.ply", np.where(seg.segmented[:, None], coord, 0).astype(np.float32), colors)
+        write_ply(files["ply"], np.where(seg.segmented[:, None], coord, 0).astype(np.float32), colors,
+                  instance=seg.labels.astype(np.int32))
         if png:  # a top view along the up axis, in metres
-            write_top_view(out / f"{scene_id}.png", seg.frame, colors[seg.segmented],
-                           f"{scene_id}: {len(seg.scores)} instances")
+            files["png"] = out / f"{scene_id}.png"
+            write_top_view(files["png"], seg.frame, colors[seg.segmented], f"{scene_id}: {len(seg.scores)} instances")
         row: dict = {"scene": scene_id, "points": len(coord), "instances": int(len(seg.scores)),
-                     "seconds": round(seconds, 2), "npz": str(out / f"{scene_id}.npz")}
+                     "seconds": round(seconds, 2), **{k: str(p) for k, p in files.items()},
+                     "files": [str(p) for p in files.values()]}
         sample = scan.sample
         if sample is not None and (sample.instance >= 0).any():
             m = summarize([match_scene(sample.instance, seg.masks, seg.scores, valid=sample.valid, scene_id=scene_id)])
