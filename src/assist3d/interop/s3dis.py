@@ -14,7 +14,6 @@ other object is clutter.
 from __future__ import annotations
 
 import io
-import json
 from pathlib import Path
 from typing import Callable
 
@@ -25,7 +24,7 @@ from ..core.fileio import write_bytes_atomic, write_text_atomic
 from ..core.taxonomy.scannet import SURFACES, scannet_label
 from ..export.labels import surface_codes
 from ..export.manifest import read_manifest, split_of
-from ..export.writer import load_scene_arrays
+from .scannet import scene_with_room
 
 __all__ = ["export_s3dis", "s3dis_class", "AREAS"]
 
@@ -67,14 +66,9 @@ def export_s3dis(data: str | Path, out: str | Path, *, on_scene: Callable[[str, 
     for e in sorted(entries, key=lambda e: e.get("index", 0) if isinstance(e, dict) else 0):
         if not (isinstance(e, dict) and isinstance(e.get("id"), str) and isinstance(e.get("index"), int)):
             raise DataError(f"{data / 'manifest.json'}: a scene entry lacks its 'id' or 'index'{fix}")
-        sid, d = e["id"], data / e["id"]
-        a = load_scene_arrays(d)
-        try:
-            layout = json.loads((d / "layout.json").read_text(encoding="utf-8"))
-            height = float(layout["room"]["height"])
-            names = list(layout.get("classes") or classes)
-        except (OSError, ValueError, KeyError, TypeError) as err:
-            raise DataError(f"{d / 'layout.json'}: unreadable room height ({err}); regenerate the scene") from None
+        sid = e["id"]
+        a = scene_with_room(data, sid, list(classes))
+        height, names = a["height"], a["classes"]
         area = AREAS[split_of(e["index"])]
         anno = out / area / sid / "Annotations"
         anno.mkdir(parents=True, exist_ok=True)

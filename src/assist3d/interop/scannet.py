@@ -108,7 +108,8 @@ def _ply(coord: np.ndarray, rgb: np.ndarray, faces: np.ndarray, *, normal: np.nd
     return ("\n".join(header) + "\n").encode("ascii") + v.tobytes() + fa.tobytes()
 
 
-def _scene(data: Path, scene_id: str, classes: list[str]) -> dict:
+def scene_with_room(data: Path, scene_id: str, classes: list[str]) -> dict:
+    """A generated scene's arrays with its room height and class list (``layout.json``), for the exporters."""
     d = data / scene_id
     arrays = load_scene_arrays(d)
     try:
@@ -177,7 +178,7 @@ def _label_map(used: dict[str, tuple[ScanNetLabel, int]]) -> str:
 
 def _export_one(job: tuple[Path, str, list[str], Path, str]) -> tuple[str, dict[str, tuple[ScanNetLabel, int]]]:
     data, scene_id, classes, out, name = job
-    _, used = _write_scene(_scene(data, scene_id, classes), out / "scans" / name, name)
+    _, used = _write_scene(scene_with_room(data, scene_id, classes), out / "scans" / name, name)
     return name, used
 
 
