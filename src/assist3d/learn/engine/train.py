@@ -7,7 +7,6 @@ events under ``tb/`` when the ``tensorboard`` package is installed. Only rank 0 
 
 from __future__ import annotations
 
-import io
 import logging
 import math
 import time
@@ -21,9 +20,10 @@ import torch
 from torch.utils.data import DistributedSampler
 
 from ...core.contracts import PointSample
-from ...core.errors import ConfigError, DataError
-from ...core.fileio import write_bytes_atomic, write_text_atomic
+from ...core.errors import ConfigError
+from ...core.fileio import write_text_atomic
 from ..models import mask3d as _mask3d  # noqa: F401  registers "mask3d"
+from ..checkpoint import Checkpoint, read_checkpoint, write_checkpoint
 from ..models.registry import build_model as build_registered
 from ..trainer import Hook, Trainer as LoopTrainer
 from .config import ModelConfig, TrainConfig, dump_train_config, parse_train_config
@@ -76,32 +76,23 @@ def build_model(cfg: ModelConfig) -> torch.nn.Module:
 
 def save_checkpoint(path: Path, model: torch.nn.Module, optimizer: Any, scheduler: Any, epoch: int, step: int,
                     cfg: TrainConfig, scaler: Any = None) -> None:
-    """Write ``path`` atomically with model, optimiser, scheduler, epoch, step and config."""
-    state = {
-        "model": _unwrap(model).state_dict(),
-        "optimizer": optimizer.state_dict() if optimizer is not None else None,
-        "scheduler": scheduler.state_dict() if scheduler is not None else None,
-        "scaler": scaler.state_dict() if scaler is not None else None,
-        "epoch": epoch,
-        "step": step,
-        "config": cfg.model_dump(mode="json"),
-    }
-    buf = io.BytesIO()
-    torch.save(state, buf)
-    write_bytes_atomic(path, buf.getvalue())
+    """Write ``path`` atomically in the one checkpoint format (:mod:`assist3d.learn.checkpoint`, tag
+    ``assist3d-mask3d``): weights, optimiser, scheduler and scaler states, epoch, step and config."""
+    states = {k: v.state_dict() for k, v in (("scheduler", scheduler), ("scaler", scaler)) if v is not None}
+    write_checkpoint(path, Checkpoint(
+        model="mask3d", config=cfg.model_dump(mode="json"), state_dict=_unwrap(model).state_dict(),
+        optimizer=optimizer.state_dict() if optimizer is not None else None,
+        progress={"epoch": epoch, "step": step}, states=states))
 
 
 def load_checkpoint(path: str | Path, map_location: str = "cpu") -> dict:
-    path = Path(path)
-    if not path.is_file():
-        raise DataError(f"{path}: checkpoint not found")
-    try:
-        state = torch.load(path, map_location=map_location, weights_only=True)
-    except Exception as e:  # noqa: BLE001 - torch raises many types for corrupt files
-        raise DataError(f"{path}: not a readable checkpoint ({type(e).__name__}: {e})") from None
-    if not isinstance(state, dict) or "model" not in state or "config" not in state:
-        raise DataError(f"{path}: not an assist3d checkpoint (expected keys model, config)")
-    return state
+    """Read a Mask3D-style checkpoint safely (this format or the one before it) as a dict: ``model`` (the
+    weights), ``optimizer``, ``scheduler``, ``scaler``, ``epoch``, ``step``, ``config``."""
+    ckpt = read_checkpoint(path, map_location, model="mask3d")
+    progress = ckpt.progress or {}
+    return {"model": ckpt.state_dict, "optimizer": ckpt.optimizer, "scheduler": ckpt.states.get("scheduler"),
+            "scaler": ckpt.states.get("scaler"), "epoch": int(progress.get("epoch", 0)),
+            "step": int(progress.get("step", 0)), "config": ckpt.config}
 
 
 def _unwrap(model: torch.nn.Module) -> torch.nn.Module:
