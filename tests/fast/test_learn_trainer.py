@@ -128,3 +128,24 @@ def test_weight_averaging_follows_the_warm_up_formula():
     a0 = a.weight.detach().clone()
     update_ema(a, b, 0.9, 1000)
     assert torch.allclose(a.weight, 0.9 * a0 + 0.1)
+
+
+def _square(k):
+    return {"k": k, "sq": k * k}
+
+
+def test_the_one_loader_gives_the_same_batches_with_workers_and_stops_where_told():
+    from assist3d.core.errors import ConfigError
+    from assist3d.learn.loader import StepLoader
+
+    with StepLoader(_square, 3, 7) as here:
+        a = list(here)
+    with StepLoader(_square, 3, 7, workers=2, prefetch=1) as there:
+        b = list(there)
+    assert a == b == [{"k": k, "sq": k * k} for k in range(3, 7)]
+    with StepLoader(_square, 5) as endless:  # no stop: the training loop decides
+        assert [endless.next() for _ in range(3)] == [(5, _square(5)), (6, _square(6)), (7, _square(7))]
+    with pytest.raises(RuntimeError, match="outside its 'with' block"):
+        StepLoader(_square).next()
+    with pytest.raises(ConfigError, match="loader workers 65"):
+        StepLoader(_square, workers=65)

@@ -1,5 +1,5 @@
 """The GPU model's data loader: each training step's prepared batch (crop, augment, voxelise, ground-truth
-masks), built ahead of the step by ``torch.utils.data.DataLoader`` worker processes.
+masks), built ahead of the step by the learning side's one loader (:class:`assist3d.learn.loader.StepLoader`).
 
 Step ``b`` of epoch ``e`` on rank ``r`` is a pure function of the training source, the config and
 ``(seed, e, r, b)``: its scenes are positions ``b * batch_size ...`` of the epoch's sampler order and
@@ -13,12 +13,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import partial
 from typing import Iterator, Protocol, Sequence
 
 import numpy as np
-from torch.utils.data import DataLoader, Dataset
 
 from ...core.contracts import PointSample
+from ..loader import StepLoader
 from .config import TrainConfig
 from .scenes import prepare_scene
 from .voxelize import VoxelScene
@@ -53,33 +54,17 @@ def batch_rng(cfg: TrainConfig, epoch: int, rank: int, b: int) -> np.random.Gene
     return np.random.default_rng([cfg.seed, epoch, rank, b])
 
 
-class _EpochBatches(Dataset):
-    """Item ``b`` is the prepared batch of step ``b`` of one epoch."""
-
-    def __init__(self, source: Source, cfg: TrainConfig, order: Sequence[int], epoch: int, rank: int) -> None:
-        self.source, self.cfg, self.order, self.epoch, self.rank = source, cfg, list(order), epoch, rank
-        self.bs = cfg.optim.batch_size
-
-    def __len__(self) -> int:
-        return math.ceil(len(self.order) / self.bs)
-
-    def __getitem__(self, b: int) -> PreparedBatch:
-        idx = self.order[b * self.bs:(b + 1) * self.bs]
-        return prepare_batch(self.source, self.cfg, idx, rng=batch_rng(self.cfg, self.epoch, self.rank, b))
-
-
-def _as_is(batch: PreparedBatch) -> PreparedBatch:
-    return batch
+def _epoch_batch(source: Source, cfg: TrainConfig, order: Sequence[int], epoch: int, rank: int, b: int) -> PreparedBatch:
+    """The prepared batch of step ``b`` of one epoch."""
+    bs = cfg.optim.batch_size
+    return prepare_batch(source, cfg, order[b * bs:(b + 1) * bs], rng=batch_rng(cfg, epoch, rank, b))
 
 
 def epoch_batches(source: Source, cfg: TrainConfig, order: Sequence[int], *, epoch: int, rank: int = 0,
                   workers: int = 0) -> Iterator[PreparedBatch]:
-    """The prepared batches of one epoch, in order; ``workers`` processes build them ahead (0: here)."""
-    steps = _EpochBatches(source, cfg, order, epoch, rank)
-    if workers <= 0:
-        for b in range(len(steps)):
-            yield steps[b]
-        return
-    loader = DataLoader(steps, batch_size=None, shuffle=False, num_workers=workers, collate_fn=_as_is,
-                        prefetch_factor=2, persistent_workers=False)
-    yield from loader
+    """The prepared batches of one epoch, in order, through :class:`assist3d.learn.loader.StepLoader`;
+    ``workers`` processes build them ahead (0: here)."""
+    order = list(order)
+    with StepLoader(partial(_epoch_batch, source, cfg, order, epoch, rank), 0,
+                    math.ceil(len(order) / cfg.optim.batch_size), workers=workers) as loader:
+        yield from loader

@@ -7,7 +7,8 @@ their crops, augmentations and voxels all come from ``numpy.random.default_rng([
 with ``workers=0`` (built in the training process) and one with ``workers=N`` see byte-identical
 batches, and a run resumed at step ``k`` sees the batches an uninterrupted run would.
 
-Workers are ``torch.utils.data.DataLoader`` worker processes (example building is numpy and scipy
+The loader is :class:`assist3d.learn.loader.StepLoader`, the learning side's one loader. Workers are
+``torch.utils.data.DataLoader`` worker processes (example building is numpy and scipy
 code that holds the GIL for much of its time, so threads would not overlap it). The loader asks for
 steps in order and hands batches back in that order, with ``prefetch`` batches per worker in flight,
 so memory stays bounded whatever the budget. On a 2-core machine one worker overlaps example
@@ -16,17 +17,15 @@ building with the network's step; on a GPU machine with many cores, more workers
 
 from __future__ import annotations
 
-import itertools
-from typing import Iterator, Sequence
+from functools import partial
+from typing import Sequence
 
 import numpy as np
-from torch.utils.data import DataLoader, Dataset, Sampler
 
 from ...core.errors import ConfigError
+from ..loader import MAX_WORKERS, StepLoader  # noqa: F401  MAX_WORKERS: the bound, named here since the start
 from .config import SegmenterConfig
 from .data import Example, Scene, make_example
-
-MAX_WORKERS = 64
 
 
 def mix_probabilities(sizes: Sequence[int], weights: Sequence[float]) -> np.ndarray:
@@ -58,68 +57,21 @@ def build_batch(scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int, step: 
     return [make_example(scenes[int(i)], cfg, rng) for i in picks]
 
 
-class _Steps(Dataset):
-    """Item ``k`` is the batch of step ``k``."""
-
-    def __init__(self, scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int, probs: np.ndarray | None = None):
-        self.scenes, self.cfg, self.seed, self.probs = scenes, cfg, seed, probs
-
-    def __getitem__(self, step: int) -> list[Example]:
-        return build_batch(self.scenes, self.cfg, self.seed, step, self.probs)
-
-
-class _From(Sampler):
-    """Steps ``start, start + 1, ...`` without end (the training loop decides when to stop)."""
-
-    def __init__(self, start: int):
-        self.start = start
-
-    def __iter__(self) -> Iterator[int]:
-        return itertools.count(self.start)
-
-
-def _as_is(batch: list[Example]) -> list[Example]:
-    return batch  # keep numpy arrays (the default collate would turn them into tensors)
-
-
-class BatchLoader:
-    """Batches of steps ``start, start + 1, ...`` in order; use as a context manager.
-
-    ``workers=0`` builds each batch when it is asked for; ``workers=N`` has ``N`` processes build
-    up to ``prefetch`` batches each ahead of the training step.
-    """
+class BatchLoader(StepLoader[list[Example]]):
+    """The segmenter's batches of steps ``start, start + 1, ...`` in order (:func:`build_batch`); use as a
+    context manager. ``workers=0`` builds each batch when it is asked for; ``workers=N`` has ``N`` processes
+    build up to ``prefetch`` batches each ahead of the training step."""
 
     def __init__(self, scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int, start: int = 0, *,
                  workers: int = 0, prefetch: int = 2, probs: np.ndarray | None = None):
-        if not (0 <= workers <= MAX_WORKERS):
-            raise ConfigError(f"loader workers {workers}: expected 0 to {MAX_WORKERS}")
         if not scenes:
             raise ConfigError("no training scenes")
-        self.next_step = start
         if probs is not None and len(probs) != len(scenes):
             raise ConfigError(f"{len(probs)} draw probabilities for {len(scenes)} training scenes")
-        self._data = _Steps(scenes, cfg, seed, probs)
-        self._loader = DataLoader(self._data, batch_size=None, sampler=_From(start), num_workers=workers,
-                                  collate_fn=_as_is, prefetch_factor=max(1, prefetch) if workers else None)
-        self._it: Iterator[list[Example]] | None = None
+        super().__init__(partial(_step_batch, list(scenes), cfg, seed, probs), start, workers=workers,
+                         prefetch=prefetch)
 
-    def __enter__(self) -> "BatchLoader":
-        self._it = iter(self._loader)
-        return self
 
-    def __exit__(self, *exc) -> None:
-        self.close()
-
-    def close(self) -> None:
-        it, self._it = self._it, None
-        shutdown = getattr(it, "_shutdown_workers", None)  # stop worker processes now, not at garbage collection
-        if shutdown is not None:
-            shutdown()
-
-    def next(self) -> tuple[int, list[Example]]:
-        """The next step's index and its examples."""
-        if self._it is None:
-            raise RuntimeError("BatchLoader used outside its 'with' block")
-        step = self.next_step
-        self.next_step += 1
-        return step, next(self._it)
+def _step_batch(scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int, probs: np.ndarray | None,
+                step: int) -> list[Example]:
+    return build_batch(scenes, cfg, seed, step, probs)
