@@ -79,17 +79,18 @@ def main() -> None:
                 else f"{m:.3f} (one seed)" for k, (m, s, v) in figs.items()}
         print(f"| {steps} | {scenes} | {len(seeds)} | {cell['learned']} | {cell['hybrid']} |")
     shipped = HERE / "shipped" / "hybrid_eval-shipped.json"
+    ship_cells: dict = {}
     if shipped.exists():  # the shipped model, measured the same way (scripts/hybrid_eval.py)
         model = next(iter(json.loads(shipped.read_text())["models"].values()))
-        cells = {}
+        ship_cells = {}
         for kind in ("learned", "hybrid"):
             scans = {s: {"AP50": v["AP50"]} for g in model[kind] for s, v in g["scans"].items()}
             rm = room_means(scans)
-            cells[kind] = (sum(rm.values()) / len(rm), rm)
-        print(f"| shipped model (821 steps, 60 scenes) | | 1 | {cells['learned'][0]:.3f} | {cells['hybrid'][0]:.3f} |")
+            ship_cells[kind] = (sum(rm.values()) / len(rm), rm)
+        print(f"| shipped model (821 steps, 60 scenes) | | 1 | {ship_cells['learned'][0]:.3f} | {ship_cells['hybrid'][0]:.3f} |")
         print()
         print("Shipped model per room, learned / hybrid: " + ", ".join(
-            f"{r} {cells['learned'][1][r]:.3f}/{cells['hybrid'][1][r]:.3f}" for r in cells["learned"][1]))
+            f"{r} {ship_cells['learned'][1][r]:.3f}/{ship_cells['hybrid'][1][r]:.3f}" for r in ship_cells["learned"][1]))
     print()
     print("Per room, learned / hybrid AP50, mean over seeds:")
     for (steps, scenes), seeds in sorted(points.items()):
@@ -116,10 +117,19 @@ def main() -> None:
                         label=f"{kind}, {scenes} scenes")
                 for st, (m, s, v) in pts:
                     ax.scatter([st] * len(v), v, color=colour, s=10, alpha=0.5)
+        if shipped.exists():
+            for kind, colour in (("learned", "tab:blue"), ("hybrid", "tab:orange")):
+                ax.axhline(ship_cells[kind][0], color=colour, ls=":", lw=1, label=f"shipped model, {kind}")
+        one = [st for st, _, n, _ in rows if n < 2]
+        if one:
+            ax.annotate("one seed so far", (one[-1], rows[-1][3]["learned"][0]), textcoords="offset points",
+                        xytext=(-70, 12), fontsize=7)
         ax.set_xscale("log")
+        ax.set_xticks([st for st, _, _, _ in rows], [str(st) for st, _, _, _ in rows])
+        ax.minorticks_off()
         ax.set_xlabel("training steps (batch 2)")
         ax.set_ylabel("AP50, mean over 6 real rooms")
-        ax.set_title("ASSIST-3D data, CPU segmenter: real-scan AP50 against training steps")
+        ax.set_title("Real-scan AP50 against training steps (ASSIST-3D data)", fontsize=10)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
         fig.tight_layout()
