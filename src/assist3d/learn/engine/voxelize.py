@@ -23,6 +23,34 @@ COLOR_STD = np.array([0.2834475483823543, 0.27566157565723015, 0.270189713708749
 
 
 @dataclass(frozen=True)
+class VoxelBins:
+    """Points binned into cubes: ``coords`` (V, 3) int64 cube indices from ``origin`` (3,) int64 (the
+    smallest cube index of the scene), ``inverse`` (N,) the cube row of each point, ``counts`` (V,) points
+    per cube; cubes ordered by their packed index."""
+
+    coords: np.ndarray
+    origin: np.ndarray
+    inverse: np.ndarray
+    counts: np.ndarray
+
+
+def voxel_bins(coord: np.ndarray, size: float) -> VoxelBins:
+    """Bin ``coord`` (N, 3) metres into ``size`` m cubes: the one grid every voxeliser of the learning side
+    uses (this model's :func:`voxelize` and the CPU segmenter's). A scene wider than 2^15 cubes along an
+    axis is refused with :class:`VoxelGridError` (the cube index is packed into 16 bits per axis)."""
+    grid = np.floor(coord.astype(np.float64) / size).astype(np.int64)
+    origin = grid.min(0)
+    grid -= origin
+    if grid.max() >= 2 ** 15:
+        raise VoxelGridError(f"the scene spans {grid.max() * size:.0f} m ({grid.max()} voxels of {size} m) along an "
+                             f"axis; the limit is {2 ** 15} voxels, {2 ** 15 * size:.0f} m (is it in millimetres? "
+                             "or enlarge the voxel size, or crop the scene)")
+    keys = (grid[:, 0] << 32) | (grid[:, 1] << 16) | grid[:, 2]
+    _, first, inverse, counts = np.unique(keys, return_index=True, return_inverse=True, return_counts=True)
+    return VoxelBins(coords=grid[first], origin=origin, inverse=inverse.reshape(-1), counts=counts)
+
+
+@dataclass(frozen=True)
 class VoxelScene:
     """One voxelised scene.
 
@@ -42,17 +70,10 @@ def voxelize(coord: np.ndarray, color: np.ndarray, instance: np.ndarray | None, 
         raise ValueError(f"coord must be a non-empty (N, 3) array, got shape {coord.shape}")
     if voxel_size <= 0:
         raise ValueError(f"voxel_size must be positive, got {voxel_size}")
-    grid = np.floor(coord.astype(np.float64) / voxel_size).astype(np.int64)
-    grid -= grid.min(0)
-    if grid.max() >= 2 ** 15:
-        raise VoxelGridError(f"scene spans {grid.max()} voxels of {voxel_size} m along an axis; the limit is "
-                             f"{2 ** 15} (enlarge voxel_size or crop the scene)")
-    keys = (grid[:, 0] << 32) | (grid[:, 1] << 16) | grid[:, 2]
-    ukeys, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-    inverse = inverse.reshape(-1)
-    v = len(ukeys)
-    coords = grid[first].astype(np.int32)
-    counts = np.bincount(inverse, minlength=v).astype(np.float64)
+    bins = voxel_bins(coord, voxel_size)
+    inverse, v = bins.inverse, len(bins.coords)
+    coords = bins.coords.astype(np.int32)
+    counts = bins.counts.astype(np.float64)
     col = np.zeros((v, 3), dtype=np.float64)
     np.add.at(col, inverse, color.astype(np.float64))
     col = (col / counts[:, None] / 255.0).astype(np.float32)

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..engine.voxelize import VoxelGridError, majority_label
+from ..engine.voxelize import VoxelGridError, majority_label, voxel_bins  # noqa: F401  VoxelGridError: the API
 
 #: Channels of the geometry-only input, in order.
 GEOMETRY_CHANNELS: tuple[str, ...] = ("one", "height", "abs_nz", "linearity", "planarity", "scattering")
@@ -94,18 +94,10 @@ def voxelize(coord: np.ndarray, size: float, color: np.ndarray | None = None,
         raise ValueError(f"coord must be a non-empty (N, 3) array, got shape {coord.shape}")
     if not np.all(np.isfinite(coord)):
         raise ValueError("coord holds non-finite values (NaN or inf)")
-    grid = np.floor(coord.astype(np.float64) / size).astype(np.int64)
-    origin = grid.min(0)
-    grid -= origin
-    if grid.max() >= 2 ** 15:
-        raise VoxelGridError(f"the scene spans {grid.max() * size:.0f} m along an axis; at {size} m voxels the limit "
-                             f"is {2 ** 15 * size:.0f} m (is it in millimetres?)")
-    keys = (grid[:, 0] << 32) | (grid[:, 1] << 16) | grid[:, 2]
-    _, first, inverse, counts = np.unique(keys, return_index=True, return_inverse=True, return_counts=True)
-    inverse = inverse.reshape(-1)
-    v = len(first)
-    coords = grid[first]
-    centres = (coords + origin + 0.5) * size
+    bins = voxel_bins(coord, size)
+    inverse, counts, coords = bins.inverse, bins.counts, bins.coords
+    v = len(coords)
+    centres = (coords + bins.origin + 0.5) * size
     col = np.zeros((v, 3), np.float64)
     if color is not None:
         for c in range(3):
