@@ -30,7 +30,7 @@ from assist3d.export import read_scene_meta
 from assist3d.core.fileio import atomic_path, write_bytes_atomic
 from assist3d.pipeline import generate_dataset, scene_name
 from assist3d.testing import dataset_digest
-from test_generate_pipeline import TINY
+from test_pipeline_generate import TINY
 
 LINUX = sys.platform.startswith("linux")
 runner = CliRunner()

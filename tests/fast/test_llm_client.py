@@ -17,7 +17,7 @@ from assist3d.llm.schema import parse_json_text
 from assist3d.planning.llm_prompts import render_plan_messages
 from assist3d.planning.llm_schema import check_answer
 from llm_fakeserver import FakeServer, Step
-from test_llm_planner import FLOOR, ONTOP, WALL
+from test_planning_llm_planner import FLOOR, ONTOP, WALL
 
 
 def _cfg(srv, tmp_path, **kw) -> LLMConfig:

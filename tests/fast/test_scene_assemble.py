@@ -15,7 +15,7 @@ from assist3d.placement import place_group
 from assist3d.planning.relations import PlanRequest
 from assist3d.scene.shell import build_shell
 
-from test_scene_placement_kit import DOOR, WINDOW, box_asset, make_catalog, plan, rect_room, shelf_asset, table_asset
+from test_placement_kit import DOOR, WINDOW, box_asset, make_catalog, plan, rect_room, shelf_asset, table_asset
 
 
 @pytest.fixture

@@ -24,7 +24,7 @@ from assist3d.core.errors import AssetError, AssistError, DataError
 from assist3d.bench.evaluation import evaluate_dataset, export_scannet_txt, import_scannet_txt
 from assist3d.export.writer import file_digest, read_scene_meta
 from llm_fakeserver import FakeServer, Step
-from test_llm_planner import FLOOR, ReversePlanner
+from test_planning_llm_planner import FLOOR, ReversePlanner
 
 N = 40
 #: An answer that would retitle the terminal, clear the screen, return to the line start and

@@ -13,7 +13,7 @@ Three operators cover a U-Net:
 * :class:`UpConv3d`    transposed kernel 2, stride 2 onto a known finer coordinate set (the skip's).
 
 Each equals the matching dense ``torch.nn.functional`` operator evaluated at the active sites
-(``tests/fast/test_model_sparse.py``). Kernel maps are cached per coordinate set in a dictionary
+(``tests/fast/test_learn_models_sparse.py``). Kernel maps are cached per coordinate set in a dictionary
 shared by every tensor derived from the same input, so the 20-odd convolutions of one U-Net level
 build their neighbour map once.
 """

@@ -3,7 +3,7 @@ catalogs plus the procedural library (702 classes, the closest offline to the pa
 
 Slow (~2 min on 2 cores: import, layouts, asset descriptors), so it is kept out of the default
 run; ``scripts/compare_generators.sh`` measures the same orderings on fully rendered datasets
-(docs/metrics.md). Run with ``pytest -m slow tests/fast/test_metrics_orderings.py``.
+(docs/metrics.md). Run with ``pytest -m slow tests/fast/test_bench_metrics_orderings.py``.
 """
 
 from __future__ import annotations

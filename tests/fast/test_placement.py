@@ -18,7 +18,7 @@ from assist3d.placement import place_group, place_group_random
 from assist3d.placement.scoring import Candidates, TargetBox, relation_score
 from assist3d.planning.relations import PlanRequest
 
-from test_scene_placement_kit import (DOOR, box_asset, footprint, front_dir, l_room, make_catalog, plan, rect_room,
+from test_placement_kit import (DOOR, box_asset, footprint, front_dir, l_room, make_catalog, plan, rect_room,
                                       table_asset)
 
 SIZES = [(1.6, 0.9, 0.8), (1.0, 0.5, 1.8), (0.6, 0.6, 0.9), (0.5, 0.5, 0.45), (1.2, 0.4, 0.7),

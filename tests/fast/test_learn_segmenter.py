@@ -13,7 +13,7 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
-from test_generate_pipeline import TINY  # noqa: E402
+from test_pipeline_generate import TINY  # noqa: E402
 from typer.testing import CliRunner  # noqa: E402
 
 from assist3d.cli import app  # noqa: E402

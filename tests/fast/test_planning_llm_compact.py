@@ -16,8 +16,8 @@ from assist3d.planning.llm_prompts import render_batch_messages, render_plan_mes
 from assist3d.planning.llm_schema import check_answer, expand_compact_entry
 from assist3d.planning.relations import validate_plan
 from llm_fakeserver import SENTINEL, FakeServer, Step
-from test_llm_batch import ONSHELF
-from test_llm_planner import FLOOR, ONTOP, WALL, ReversePlanner
+from test_planning_llm_batch import ONSHELF
+from test_planning_llm_planner import FLOOR, ONTOP, WALL, ReversePlanner
 
 FULL = {
     "floor": {"objects": [

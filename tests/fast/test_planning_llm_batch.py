@@ -17,8 +17,8 @@ from assist3d.planning.llm_prompts import render_batch_messages
 from assist3d.planning.llm_schema import split_batch_answer
 from assist3d.planning.relations import PlanRequest, validate_plan
 from llm_fakeserver import SENTINEL, FakeServer, Step
-from test_llm_layout import MODEL as LAYOUT_MODEL, _catalog, _llm_cfg
-from test_llm_planner import FLOOR, ONTOP, ROOM, ReversePlanner, _asset
+from test_planning_llm_layout import MODEL as LAYOUT_MODEL, _catalog, _llm_cfg
+from test_planning_llm_planner import FLOOR, ONTOP, ROOM, ReversePlanner, _asset
 
 MODEL = "fake-model"
 layout_mod = pytest.importorskip("assist3d.scene.layout")

@@ -12,7 +12,7 @@ from assist3d.core.geometry import pose_matrix, wall_segments, world_bounds
 from assist3d.placement import place_group
 from assist3d.planning.relations import PlanRequest
 
-from test_scene_placement_kit import (DOOR, WINDOW, box_asset, footprint, front_dir, make_catalog, plan, rect_room,
+from test_placement_kit import (DOOR, WINDOW, box_asset, footprint, front_dir, make_catalog, plan, rect_room,
                                       shelf_asset, table_asset)
 
 
@@ -140,7 +140,7 @@ def test_surface_inside_a_closed_model_or_overhung_carries_nothing(tmp_path):
 
     from assist3d.core.contracts import MeshData, SupportSurface
 
-    from test_scene_placement_kit import box_mesh, merge
+    from test_placement_kit import box_mesh, merge
 
     # A closed 1 x 1 x 1 m block whose record claims a surface at 0.5 m (inside the material),
     # with every face duplicated back to back as catalog meshes often are; and a table whose

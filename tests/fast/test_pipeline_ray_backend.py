@@ -21,7 +21,7 @@ from assist3d.core.errors import ConfigError
 from assist3d.export import read_scene_meta
 from assist3d.pipeline import generate_dataset, scene_name
 from assist3d.testing import dataset_digest
-from test_generate_pipeline import TINY
+from test_pipeline_generate import TINY
 
 pytestmark = pytest.mark.slow  # signals and subprocesses: the slow tier
 

@@ -12,7 +12,7 @@ from assist3d.config import parse_config
 from assist3d.export.manifest import llm_summary
 from assist3d.pipeline import generate_dataset
 from llm_fakeserver import SENTINEL, FakeServer, Step, files_containing
-from test_llm_layout import _answer
+from test_planning_llm_layout import _answer
 
 MODEL = "fake-gen"
 
