@@ -96,6 +96,7 @@ def test_labels_never_overlap_and_the_crowded_ones_are_counted():
         assert np.allclose([(b.x0 + b.x1) / 2, (b.y0 + b.y1) / 2], ax2.transData.transform(anchor), atol=1.5)
 
 
+@pytest.mark.slow
 def test_show_writes_beside_the_dataset_unless_told(tmp_path, monkeypatch):
     ds = _dataset(tmp_path / "ds", scenes=1)
     before = _tree(ds)

@@ -4,6 +4,7 @@ figures of experiments/fidelity-log.md, and the scorer's fit."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import torch
 
 
@@ -37,6 +38,7 @@ def test_best_iou_skips_objects_under_100_points(load_script):
     assert np.allclose(ps.best_iou(masks, inst), [0.5, 0.0])
 
 
+@pytest.mark.slow
 def test_scorer_fit_ranks_by_the_target(load_script):
     ps = load_script("proposal_scorer")
     rng = np.random.default_rng(0)
