@@ -345,3 +345,32 @@ def test_scannet_face_index_out_of_range_names_the_mesh(tmp_path):
     write_ply(d / "scene0000_00_vh_clean_2.ply", GRID, RGB, np.array([[0, 1, 99]]))
     with pytest.raises(DataError, match=r"vh_clean_2\.ply.*out of range"):
         open_dataset(f"scannet:{tmp_path}")[0]
+
+
+def test_scan_files_are_a_reader_too(tmp_path):
+    """``scan:PATH`` reads the files `segment` takes (a .ply, an (N, 3|6|8) .npy, a folder of them) as a
+    dataset: no ground truth unless the array carries it; non-finite points refused, naming the file."""
+    g = np.random.default_rng(0)
+    xyz = g.random((50, 3)).astype(np.float32)
+    rgb = (g.random((50, 3)) * 255).astype(np.uint8)
+    write_ply(tmp_path / "a.ply", xyz, rgb)
+    np.save(tmp_path / "b.npy", np.concatenate([xyz, rgb.astype(np.float32)], 1))
+    np.save(tmp_path / "c.npy", xyz)
+    full = np.zeros((50, 8), np.float32)
+    full[:, :3], full[:, 6], full[:, 7] = xyz, 5, 1 + (np.arange(50) >= 25)
+    np.save(tmp_path / "d.npy", full)
+    (tmp_path / "notes.txt").write_text("not a scan")
+    ds = open_dataset(f"scan:{tmp_path}")
+    assert ds.scene_ids == ["a", "b", "c", "d"]
+    a, b, c, d = (ds.load(s) for s in ds.scene_ids)
+    assert np.allclose(a.coord, xyz) and np.array_equal(a.color, rgb) and np.array_equal(b.color, rgb)
+    assert (c.color == 0).all() and all((s.instance == -1).all() for s in (a, b, c))
+    assert sorted(np.unique(d.instance)) == [1, 2]  # the (N, 8) array keeps its objects
+    bad = xyz.copy()
+    bad[3] = np.nan
+    np.save(tmp_path / "nan.npy", bad)
+    with pytest.raises(DataError, match=r"nan\.npy: 1 of 50 points have non-finite"):
+        open_dataset(f"scan:{tmp_path / 'nan.npy'}").load("nan")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(DataError, match="no .ply or .npy scans"):
+        open_dataset(f"scan:{tmp_path / 'empty'}")

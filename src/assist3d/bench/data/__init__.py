@@ -12,6 +12,7 @@ s3dis       ``Stanford3dDataset_v1.2_Aligned_Version``, an area or a room   ``ca
 pointcept   Pointcept scene folder, split folder or root of splits         ``segment``, ``ignore``
 assist3d    our generator's output folder                                  -
 array       one ``(N, 8)`` ``.npy`` or a folder of them                    ``objects``
+scan        one ``.ply`` / ``(N, 3|6|8)`` ``.npy`` scan or a folder of them -
 ==========  =============================================================  ====================
 
 In every reader, objects are the points with ``instance >= 0``; ``instance == -1`` is void. The
@@ -37,6 +38,7 @@ from .pointcept import PointceptDataset
 from .s3dis import S3DISDataset
 from .scannet import ScanNetDataset
 from .scannetpp import ScanNetPPDataset
+from .scanfile import ScanDataset
 
 __all__ = ["FORMATS", "READERS", "Reader", "SceneDataset", "open_dataset", "parse_spec"]
 
@@ -58,6 +60,7 @@ READERS.add("s3dis", Reader(lambda p, **kw: S3DISDataset(p, **kw), frozenset({"c
 READERS.add("pointcept", Reader(lambda p, **kw: PointceptDataset(p, fmt="pointcept", **kw), frozenset({"segment", "ignore"})))
 READERS.add("assist3d", Reader(lambda p, **kw: PointceptDataset(p, fmt="assist3d", **kw)))
 READERS.add("array", Reader(lambda p, **kw: ArrayDataset(p, **kw), frozenset({"objects"})))
+READERS.add("scan", Reader(lambda p, **kw: ScanDataset(p, **kw)))
 FORMATS: tuple[str, ...] = READERS.names()  # the built-in formats
 
 

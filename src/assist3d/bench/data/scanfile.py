@@ -15,7 +15,7 @@ import numpy as np
 from ...core.contracts import PointSample
 from ...core.errors import DataError, shown
 from .array import ArrayDataset
-from .base import REAL_KINDS, clean_colors, read_npy
+from .base import REAL_KINDS, SceneDataset, checked_coords, clean_colors, read_npy
 from .ply import read_ply
 
 #: suffixes :func:`read_scan` reads
@@ -58,3 +58,36 @@ def read_scan(path: str | Path) -> ScanFile:
     if len(coord) == 0:
         raise DataError(f"{path}: scene {shown(path.stem)} has no points")
     return ScanFile(path.stem, coord, color, None)
+
+
+class ScanDataset(SceneDataset):
+    """``scan:PATH``: scan files as a user has them (PATH one ``.ply`` or ``(N, 3|6|8)`` ``.npy``, or a folder
+    of them; the scene id is the file stem), through :func:`read_scan`. Without ground truth (every file but
+    an ``(N, 8)`` array) every point is background (instance -1), so such a scan can be segmented, viewed or
+    measured but scores no object. As a dataset reader it keeps the readers' rules: non-finite or far-out
+    coordinates are refused with one line naming the file (``assist3d segment FILE`` instead drops them)."""
+
+    def __init__(self, root: Path) -> None:
+        root = Path(root)
+        if root.is_file():
+            files = {root.stem: root}
+        elif root.is_dir():
+            files = {p.stem: p for p in sorted(root.iterdir()) if p.suffix.lower() in SCAN_SUFFIXES and p.is_file()}
+        else:
+            raise DataError(f"{root}: scan file or folder not found")
+        if not files:
+            raise DataError(f"{root}: no {' or '.join(SCAN_SUFFIXES)} scans in the folder")
+        self._files = files
+        super().__init__(root, "scan", list(files))
+
+    def _load(self, scene_id: str) -> PointSample:
+        path = self._files[scene_id]
+        scan = read_scan(path)
+        if scan.sample is not None:
+            return scan.sample
+        coord = checked_coords(path, scan.coord)
+        n = len(coord)
+        color = scan.color if scan.color is not None else np.zeros((n, 3), np.uint8)
+        return PointSample(scene_id=scene_id, coord=coord, color=np.ascontiguousarray(color, np.uint8),
+                           normal=np.zeros((n, 3), np.float32), instance=np.full(n, -1, np.int32),
+                           segment=np.full(n, -1, np.int32), valid=np.ones(n, bool))
