@@ -54,3 +54,35 @@ def test_both_trainers_write_the_format_and_the_mask3d_file_of_before_still_read
         read_checkpoint(tmp_path / "future.pt")
     with pytest.raises(DataError, match="checkpoint not found"):
         read_checkpoint(tmp_path / "missing.pt")
+
+
+def test_one_predictor_runs_either_model_from_its_checkpoint(tmp_path):
+    """``Predictor.load`` reads the model a checkpoint names: a Mask3D-style file gives the model's own
+    instances, the same masks as the model's predict_scene, and refuses segmenter-only steps by name."""
+    import sys
+    from pathlib import Path
+
+    import numpy as np
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    import test_learn_engine as engine_tests
+    from assist3d.learn.engine.config import parse_train_config
+    from assist3d.learn.engine.predict import load_model, predict_scene
+    from assist3d.learn.engine.train import MemorySource, train
+    from assist3d.learn.segmenter.predictor import Predictor
+
+    cfg = parse_train_config({**engine_tests.TINY, "optim": {**engine_tests.TINY.get("optim", {}), "epochs": 1}})
+    scenes = engine_tests._scenes()
+    train(cfg, tmp_path / "run", source=MemorySource(scenes))
+    p = Predictor.load(tmp_path / "run" / "last.pt", method="learned")
+    seg = p.segment(scenes[0].coord, scenes[0].color)
+    model, c, dev = load_model(tmp_path / "run" / "last.pt", "cpu")
+    ref = predict_scene(model, scenes[0], c.data.voxel_size, c.predict, dev)
+    assert p.loaded.name == "mask3d" and np.array_equal(seg.masks, ref.masks) and np.array_equal(seg.scores, ref.scores)
+    held = seg.masks.any(0)
+    assert ((seg.labels >= 0) == held).all()
+    with pytest.raises(DataError, match="'hybrid' works on the outputs of a segmenter model, not a mask3d model: use "
+                                        "--method learned"):
+        Predictor.load(tmp_path / "run" / "last.pt")
+    with pytest.raises(DataError, match="--tta"):
+        Predictor.load(tmp_path / "run" / "last.pt", method="learned", tta=True)

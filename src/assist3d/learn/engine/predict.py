@@ -11,7 +11,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Callable, ClassVar
 
 import numpy as np
 import torch
@@ -23,9 +23,10 @@ from ...core.contracts import PointSample
 from ...core.errors import shown
 from ...core.fileio import write_npz_atomic
 from ...core.paths import safe_name
-from .config import PredictConfig, TrainConfig
+from ..checkpoint import Checkpoint, read_checkpoint
+from .config import PredictConfig, TrainConfig, parse_train_config
 from .scenes import open_spec
-from .train import build_model, config_from_checkpoint, load_checkpoint, resolve_device
+from .train import build_model, resolve_device
 from .voxelize import collate, voxelize
 
 log = logging.getLogger(__name__)
@@ -108,15 +109,30 @@ def predict_scene(model: torch.nn.Module, sample: PointSample, voxel_size: float
     return ScenePrediction(masks=np.ascontiguousarray(masks[order]), scores=scores[order].astype(np.float32))
 
 
+@dataclass
+class LoadedMask3D:
+    """A Mask3D-style model in eval mode with its training configuration (``predict`` holds its settings)."""
+
+    model: torch.nn.Module
+    config: TrainConfig
+    meta: dict
+    name: ClassVar[str] = "mask3d"  # the model's registry name
+
+
+def mask3d_from_checkpoint(ckpt: Checkpoint, device: str = "cpu") -> LoadedMask3D:
+    """The model of a checkpoint already read (:func:`assist3d.learn.checkpoint.read_checkpoint`)."""
+    cfg = parse_train_config(ckpt.config, "checkpoint config")
+    model = build_model(cfg.model).to(device)
+    model.load_state_dict(ckpt.state_dict)
+    model.eval()
+    return LoadedMask3D(model=model, config=cfg, meta=ckpt.meta)
+
+
 def load_model(checkpoint: str | Path, device: str = "auto") -> tuple[torch.nn.Module, TrainConfig, str]:
     """Model (eval mode) and training config from a checkpoint written by :func:`assist3d.learn.engine.train.train`."""
     dev = resolve_device(device)
-    state = load_checkpoint(checkpoint, dev)
-    cfg = config_from_checkpoint(state)
-    model = build_model(cfg.model).to(dev)
-    model.load_state_dict(state["model"])
-    model.eval()
-    return model, cfg, dev
+    loaded = mask3d_from_checkpoint(read_checkpoint(checkpoint, dev, model="mask3d"), dev)
+    return loaded.model, loaded.config, dev
 
 
 def predict_dataset(checkpoint: str | Path, spec: str, out_dir: str | Path, *, device: str = "auto",

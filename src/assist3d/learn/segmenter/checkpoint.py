@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import torch
 
@@ -31,6 +31,8 @@ Weights = Literal["trained", "live"]
 @dataclass
 class LoadedSegmenter:
     """``model`` is in eval mode; ``ema_state`` holds a training file's averaged weights, if any."""
+
+    name: ClassVar[str] = "segmenter"  # the model's registry name
 
     model: Network
     config: SegmenterConfig
@@ -57,7 +59,12 @@ def load_segmenter(path: str | Path, device: str = "cpu", weights: Weights = "tr
     them (a training file of a run with ``optim.ema_decay``), else its weights; ``"live"`` builds the
     optimiser's weights (resuming a run)."""
     path = Path(path)
-    ckpt = read_checkpoint(path, device, model="segmenter")
+    return segmenter_from_checkpoint(read_checkpoint(path, device, model="segmenter"), path, device, weights)
+
+
+def segmenter_from_checkpoint(ckpt: Checkpoint, path: Path, device: str = "cpu",
+                              weights: Weights = "trained") -> LoadedSegmenter:
+    """The segmenter of a checkpoint already read (:func:`assist3d.learn.checkpoint.read_checkpoint`)."""
     cfg = parse_segmenter_config(legacy_config(ckpt.config, str(path)), f"{path} config")
     model = build_model("segmenter", cfg.net)
     state = ckpt.ema_state if ckpt.ema_state is not None and weights == "trained" else ckpt.state_dict

@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Callable, Iterator, Sequence
 
 import numpy as np
+import torch
 
 from ...bench.data import READERS, open_dataset
 from ...bench.data.base import MAX_COORD_M
@@ -41,7 +42,11 @@ from ...core.paths import safe_name
 from ...core.registry import Registry
 from ...export.segmentation import instance_colors, write_top_view
 from ..engine.voxelize import VoxelGridError
-from .checkpoint import LoadedSegmenter, load_segmenters
+from ...core.contracts import PointSample
+from ..checkpoint import read_checkpoint
+from ..engine.config import TrainConfig
+from ..engine.predict import LoadedMask3D, mask3d_from_checkpoint, predict_scene
+from .checkpoint import LoadedSegmenter, load_segmenters, segmenter_from_checkpoint
 from .config import SegmenterConfig
 from .features import UNITS, to_segmenter_frame
 from .geometric import segment_geometric
@@ -56,17 +61,42 @@ log = logging.getLogger(__name__)
 @dataclass(frozen=True)
 class Step:
     """A post-processing step: ``run(model, config, coord, color, *, tta) -> Segmentation`` on a scan
-    in metres with z up; ``needs_model`` False for steps that use no network."""
+    in metres with z up; ``needs_model`` False for steps that use no network; ``models``: the registry
+    names of the models whose outputs it works on."""
 
     run: Callable[..., Segmentation]
     needs_model: bool = True
+    models: frozenset[str] = frozenset({"segmenter"})
+
+
+def _mask3d_instances(model, cfg: TrainConfig, coord: np.ndarray, color: np.ndarray | None, *,
+                      tta: bool = False) -> Segmentation:
+    """The Mask3D-style model's own instances (its ``predict`` settings), as a :class:`Segmentation`."""
+    if tta:
+        raise DataError("test-time augmentation (segment --tta) is for the CPU segmenter, not a mask3d model")
+    n = len(coord)
+    rgb = np.asarray(color, np.uint8) if color is not None else np.zeros((n, 3), np.uint8)
+    sample = PointSample(scene_id="scan", coord=coord, color=rgb, normal=np.zeros((n, 3), np.float32),
+                         instance=np.full(n, -1, np.int32), segment=np.full(n, -1, np.int32), valid=np.ones(n, bool))
+    pred = predict_scene(model, sample, cfg.data.voxel_size, cfg.predict, next(model.parameters()).device.type)
+    labels = np.full(n, -1, np.int64)
+    for i in range(len(pred.scores) - 1, -1, -1):  # the best-scoring mask names a point held by several
+        labels[pred.masks[i]] = i
+    return Segmentation(masks=pred.masks, scores=pred.scores, labels=labels)
+
+
+def _network_instances(model, cfg, coord, color, *, tta=False) -> Segmentation:
+    if isinstance(cfg, TrainConfig):
+        return _mask3d_instances(model, cfg, coord, color, tta=tta)
+    return segment_points(model, cfg, coord, color, tta=tta)
 
 
 #: post-processing steps by name (``assist3d segment --method NAME``)
 STEPS: Registry[Step] = Registry("post-processing step")
 STEPS.add("hybrid", Step(lambda model, cfg, coord, color, *, tta=False: segment_hybrid(model, cfg, coord, color, tta=tta)))
-STEPS.add("learned", Step(lambda model, cfg, coord, color, *, tta=False: segment_points(model, cfg, coord, color, tta=tta)))
-STEPS.add("geometric", Step(lambda model, cfg, coord, color, *, tta=False: segment_geometric(coord), needs_model=False))
+STEPS.add("learned", Step(_network_instances, models=frozenset({"segmenter", "mask3d"})))
+STEPS.add("geometric", Step(lambda model, cfg, coord, color, *, tta=False: segment_geometric(coord), needs_model=False,
+                            models=frozenset()))
 
 
 def usable_points(where: str, scene_id: str, coord: np.ndarray, units: str = "m") -> np.ndarray:
@@ -116,12 +146,18 @@ class ScanSegmentation(Segmentation):
 class Predictor:
     """A segmenter (or none, for the geometric step) and the post-processing step that runs after it."""
 
-    def __init__(self, loaded: LoadedSegmenter | None, method: str = "hybrid", *, tta: bool = False,
+    def __init__(self, loaded: LoadedSegmenter | LoadedMask3D | None, method: str = "hybrid", *, tta: bool = False,
                  device: str = "cpu") -> None:
         self.step = STEPS.get(method)
         self.method = method
         if self.step.needs_model and loaded is None:
             raise DataError(f"post-processing step {method!r} needs a model")
+        if self.step.needs_model and loaded.name not in self.step.models:
+            works = [name for name in STEPS.names() if loaded.name in STEPS.get(name).models]
+            raise DataError(f"post-processing step {method!r} works on the outputs of a {'/'.join(sorted(self.step.models))} "
+                            f"model, not a {loaded.name} model: use --method {' or '.join(works)}")
+        if tta and loaded is not None and loaded.name != "segmenter":
+            raise DataError(f"test-time augmentation (segment --tta) is for the CPU segmenter, not a {loaded.name} model")
         if not self.step.needs_model and tta:
             raise DataError(f"test-time augmentation (segment --tta) is for a network; step {method!r} has none")
         self.loaded = loaded if self.step.needs_model else None
@@ -144,14 +180,22 @@ class Predictor:
             paths = [checkpoints]
         else:
             paths = list(checkpoints)
-        return cls(load_segmenters(paths, device), method, tta=tta, device=device)
+        if len(paths) > 1:
+            return cls(load_segmenters(paths, device), method, tta=tta, device=device)
+        path = Path(paths[0])
+        ckpt = read_checkpoint(path, device)  # any model of the registry: the file names it
+        if ckpt.model == "segmenter":
+            return cls(segmenter_from_checkpoint(ckpt, path, device), method, tta=tta, device=device)
+        if ckpt.model == "mask3d":
+            return cls(mask3d_from_checkpoint(ckpt, device), method, tta=tta, device=device)
+        raise DataError(f"{path}: a {ckpt.model} checkpoint; segment runs segmenter and mask3d models")
 
     @property
-    def model(self) -> Network | None:
+    def model(self) -> Network | torch.nn.Module | None:
         return self.loaded.model if self.loaded is not None else None
 
     @property
-    def config(self) -> SegmenterConfig | None:
+    def config(self) -> SegmenterConfig | TrainConfig | None:
         return self.loaded.config if self.loaded is not None else None
 
     def segment(self, coord: np.ndarray, color: np.ndarray | None = None, *, up_axis: str = "z", units: str = "m",
