@@ -21,6 +21,7 @@ import torch
 from torch.utils.data import DistributedSampler
 
 from ...core.contracts import PointSample
+from ...core import reading
 from ...core.errors import ConfigError, DataError
 from ...core.fileio import write_bytes_atomic, write_text_atomic
 from ..models import mask3d as _mask3d  # noqa: F401  registers "mask3d"
@@ -94,10 +95,7 @@ def load_checkpoint(path: str | Path, map_location: str = "cpu") -> dict:
     path = Path(path)
     if not path.is_file():
         raise DataError(f"{path}: checkpoint not found")
-    try:
-        state = torch.load(path, map_location=map_location, weights_only=True)
-    except Exception as e:  # noqa: BLE001 - torch raises many types for corrupt files
-        raise DataError(f"{path}: not a readable checkpoint ({type(e).__name__}: {e})") from None
+    state = reading.read_checkpoint(path, map_location=map_location)
     if not isinstance(state, dict) or "model" not in state or "config" not in state:
         raise DataError(f"{path}: not an assist3d checkpoint (expected keys model, config)")
     return state

@@ -27,9 +27,6 @@ from __future__ import annotations
 
 import io
 import json
-import pickle
-import re
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -37,7 +34,8 @@ from typing import Any, Literal
 import torch
 import torch.nn.functional as F
 
-from ...core.errors import DataError
+from ...core import reading
+from ...core.errors import DataError, shown
 from ...core.fileio import write_bytes_atomic
 from .config import SegmenterConfig, legacy_config, parse_segmenter_config
 from ..models.registry import build_model
@@ -128,9 +126,10 @@ def _json(path: Path, payload: dict, key: str) -> dict:
     if not isinstance(raw, str):
         raise DataError(f"{path}: not an assist3d segmenter checkpoint ({key!r} is not a JSON string)")
     try:
-        value = json.loads(raw)
-    except json.JSONDecodeError as e:
-        raise DataError(f"{path}: not an assist3d segmenter checkpoint ({key!r} is not valid JSON: {e})") from None
+        value = reading.parse_json(raw, path)
+    except DataError as e:
+        raise DataError(f"{shown(path, 400)}: not an assist3d segmenter checkpoint ({key!r}: "
+                        f"{reading.problem(e, path)})") from None
     if not isinstance(value, dict):
         raise DataError(f"{path}: not an assist3d segmenter checkpoint ({key!r} is not a JSON object)")
     return value
@@ -159,17 +158,7 @@ def load_segmenter(path: str | Path, device: str = "cpu", weights: Weights = "tr
     path = Path(path)
     if not path.is_file():
         raise DataError(f"{path}: checkpoint not found" + (" (it is a folder)" if path.is_dir() else ""))
-    if not zipfile.is_zipfile(path):
-        raise DataError(f"{path}: not a readable checkpoint (not a PyTorch archive)")
-    try:
-        payload = torch.load(path, map_location=device, weights_only=True)
-    except pickle.UnpicklingError as e:
-        found = re.search(r"Unsupported global: GLOBAL ([\w.]+)", str(e))
-        what = f": {found.group(1)}" if found else ""
-        raise DataError(f"{path}: refused: the file holds objects other than tensors and numbers{what}; "
-                        "loading it could run code") from None
-    except (RuntimeError, EOFError, OSError, ValueError, zipfile.BadZipFile, KeyError, AttributeError) as e:
-        raise DataError(f"{path}: not a readable checkpoint ({type(e).__name__})") from None
+    payload = reading.read_checkpoint(path, map_location=device)
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise DataError(f"{path}: not an assist3d segmenter checkpoint (no format tag {FORMAT!r})")
     if payload.get("version") not in (VERSION, VERSION_INT8):
