@@ -128,7 +128,8 @@ def decode_text(data: bytes, source: str | os.PathLike, *, error: type[AssistErr
         text = text[1:]
     nul = text.find("\0")
     if nul >= 0:
-        raise error(f"{_where(source)}: not {what}: a NUL byte at character {nul} (a binary file?)")
+        raise error(f"{_where(source)}: not {encoding.upper()} text: a NUL byte at character {nul} (a binary file, "
+                    f"or text saved as UTF-16 / UTF-32?); save the {what} as {encoding.upper()}")
     return text
 
 
@@ -274,7 +275,7 @@ def _array_need(source: str, shape: tuple, dtype: np.dtype, error: type[AssistEr
 def read_npy(path: str | os.PathLike, *, error: type[AssistError] = DataError, mmap: bool = False) -> np.ndarray:
     """A ``.npy`` array without pickles. The header is checked first: object arrays are refused, and so
     is a file shorter than its header's shape says (truncated, or a forged shape that would allocate
-    terabytes)."""
+    terabytes) or longer (a damaged or concatenated file)."""
     p = Path(path)
     st = _check_file(p, error, None)
     src = _where(p)
@@ -288,6 +289,9 @@ def read_npy(path: str | os.PathLike, *, error: type[AssistError] = DataError, m
     have = st.st_size - offset
     if need > have:
         raise error(f"{src}: truncated .npy: shape {shape} of {dtype} needs {need} bytes of data, the file holds {have}")
+    if need < have:  # np.save writes exactly the array: more is a damaged or concatenated file
+        raise error(f"{src}: damaged .npy: shape {shape} of {dtype} is {need} bytes of data, the file holds {have} "
+                    f"({have - need} more)")
     if not mmap:
         _array_need(src, shape, dtype, error)
     try:
@@ -383,6 +387,14 @@ _PLY_SIZES = {"char": 1, "int8": 1, "uchar": 1, "uint8": 1, "short": 2, "int16":
               "int": 4, "int32": 4, "uint": 4, "uint32": 4, "float": 4, "float32": 4, "double": 8, "float64": 8}
 
 
+def _tokens(data: bytes) -> int:
+    """How many whitespace-separated words ``data`` holds (counted without splitting it)."""
+    if not data:
+        return 0
+    space = np.frombuffer(data, np.uint8) <= 32
+    return int(np.count_nonzero(space[:-1] & ~space[1:])) + int(not space[0])
+
+
 def _mesh_bounds(source: str, vertices: int, triangles: int, error: type[AssistError]) -> None:
     if vertices > MAX_MESH_VERTICES:
         raise error(f"{source}: {vertices:,} vertices, more than the {MAX_MESH_VERTICES:,} a mesh may have")
@@ -397,7 +409,7 @@ def _ply_counts(data: bytes, source: str, error: type[AssistError]) -> None:
     nl = data.find(b"\n", end)
     body = len(data) - (nl + 1 if nl >= 0 else len(data))
     binary = b"binary" in data[:end]
-    least = 0
+    least = values = 0
     counts: dict[str, int] = {}
     name, count, rec, props = None, 0, 0, 0
     lines = data[:end].decode("ascii", "replace").splitlines()
@@ -407,6 +419,7 @@ def _ply_counts(data: bytes, source: str, error: type[AssistError]) -> None:
             if name is not None:
                 counts[name] = count
                 least += count * (max(rec, 1) if binary else 2 * max(props, 1))  # ascii: "v " per value
+                values += count * props
             try:
                 name, count, rec, props = tok[1], int(tok[2]), 0, 0
             except ValueError:
@@ -419,10 +432,18 @@ def _ply_counts(data: bytes, source: str, error: type[AssistError]) -> None:
                 rec += _PLY_SIZES.get(tok[2], 1)  # at least the list's length
             else:
                 rec += _PLY_SIZES.get(tok[1], 1)
+    shown_counts = ", ".join(f"{k} {v:,}" for k, v in counts.items())
     if least > body:
-        shown_counts = ", ".join(f"{k} {v:,}" for k, v in counts.items())
         raise error(f"{source}: truncated PLY: its header claims {shown_counts}: at least {least:,} bytes of data, the file holds "
                     f"{body:,}")
+    if not binary:  # one line per element, one value per property at least (a list: its length)
+        text = data[len(data) - body:]
+        lines = len([ln for ln in text.splitlines() if ln.strip()]) if len(counts) else 0
+        have = _tokens(text)
+        records = sum(counts.values())
+        if records > lines or values > have:
+            raise error(f"{source}: truncated PLY: its header claims {shown_counts} ({records:,} lines, at least "
+                        f"{values:,} values), the file holds {lines:,} lines and {have:,} values")
     _mesh_bounds(source, counts.get("vertex", 0), counts.get("face", 0), error)
 
 
@@ -447,6 +468,11 @@ def _off_counts(data: bytes, source: str, error: type[AssistError]) -> None:
     if least > len(data):
         raise error(f"{source}: OFF header claims {v:,} vertices and {f:,} faces: at least {least:,} bytes, "
                     f"the file holds {len(data):,}")
+    body = b"\n".join(line.split(b"#", 1)[0] for line in data.splitlines())
+    have = _tokens(body) - 4  # the keyword and the three counts
+    if 3 * v + 4 * f > have:
+        raise error(f"{source}: truncated OFF: its header claims {v:,} vertices and {f:,} faces (at least "
+                    f"{3 * v + 4 * f:,} values), the file holds {max(have, 0):,}")
     _mesh_bounds(source, v, f, error)
 
 
@@ -464,9 +490,13 @@ def check_mesh_counts(data: bytes, file_type: str, source: str | os.PathLike, *,
                       error: type[AssistError] = DataError) -> None:
     """Refuse mesh bytes whose header claims more elements than the file can hold, or more than
     :data:`MAX_MESH_VERTICES` / :data:`MAX_MESH_TRIANGLES` (before a loader allocates for them).
-    ``file_type``: ``ply``, ``off``, ``stl`` (other formats: their size bounds their counts)."""
+    ``file_type``: ``ply``, ``off``, ``stl`` (other formats: their size bounds their counts). A text
+    format (``obj``, ``off``) holding NUL bytes (saved as UTF-16 / UTF-32) is refused too."""
     src = _where(source)
     kind = file_type.lower().lstrip(".")
+    if kind in ("obj", "off") and b"\0" in data[:1 << 16]:
+        raise error(f"{src}: a text mesh ({kind.upper()}) holding NUL bytes: is it saved as UTF-16 or UTF-32? "
+                    "save it as UTF-8 or ASCII")
     if kind == "ply":
         _ply_counts(data, src, error)
     elif kind == "off":
