@@ -116,6 +116,9 @@ def build_examples(root: Path) -> None:
         blob = tm.export(file_type=ext, **kw)
         (meshes / f"chair.{ext}").write_bytes(blob.encode() if isinstance(blob, str) else blob)
         rows.append({"path": f"chair.{ext}", "class": "chair", "up": "+z", "front": "+y"})
+    for name, blob in tm.export(file_type="gltf").items():  # the JSON and its buffer file beside it
+        (meshes / ("chair.gltf" if name.endswith(".gltf") else name)).write_bytes(blob)
+    rows.append({"path": "chair.gltf", "class": "chair", "up": "+z", "front": "+y"})
     blob = tm.export(file_type="ply", encoding="ascii")
     (meshes / "chair-ascii.ply").write_bytes(blob.encode() if isinstance(blob, str) else blob)
     rows.append({"path": "chair-ascii.ply", "class": "chair", "up": "+z", "front": "+y"})
@@ -272,7 +275,7 @@ def targets(examples: Path) -> list[Target]:
     for manifest, fmt in (("manifest.json", "json"), ("manifest.csv", "csv")):
         out.append(Target("mesh manifest", f"manifest:{manifest}", "meshes", manifest, fmt, _import(manifest),
                           outputs=("_catalog",)))
-    for mesh in ("chair.obj", "chair.glb", "chair.ply", "chair-ascii.ply", "chair.stl", "chair.off"):
+    for mesh in ("chair.obj", "chair.glb", "chair.gltf", "chair.ply", "chair-ascii.ply", "chair.stl", "chair.off"):
         fmt = mesh.rsplit(".", 1)[1]
         out.append(Target("mesh", f"mesh:{mesh}", "meshes", mesh, fmt, _import("manifest.json"),
                           outputs=("_catalog",),
@@ -302,7 +305,7 @@ def targets(examples: Path) -> list[Target]:
 # ------------------------------------------------------------------------------------------------
 # mutations: (new bytes, must the reader refuse them?, what was done)
 
-TEXT = {"yaml", "json", "csv", "text", "obj", "off"}
+TEXT = {"yaml", "json", "csv", "text", "obj", "off", "gltf"}
 
 
 def _truncate(data: bytes, fmt: str, rng: random.Random) -> tuple[bytes, bool, str]:
@@ -336,7 +339,9 @@ def _encoding(data: bytes, fmt: str, rng: random.Random) -> tuple[bytes, bool, s
             text = "\n".join(lines)
         # our own text formats are UTF-8: any other encoding must be refused; a mesh's text may hold
         # other 8-bit encodings in its comments and names (common in the wild), but never UTF-16 / 32
-        must = fmt not in ("obj", "off", "ply") or enc.startswith("utf-")
+        # (glTF is JSON: UTF-16 / 32 JSON is still readable JSON, Latin-1 bytes are not)
+        must = (fmt not in ("obj", "off", "ply", "gltf") or (fmt != "gltf" and enc.startswith("utf-"))
+                or (fmt == "gltf" and not enc.startswith("utf-")))
         return text.encode(enc, "replace"), must, f"re-encoded as {enc}"
     if fmt == "npy":  # the other byte order: the same bytes read as other numbers
         new = data.replace(b"'<", b"'>", 1) if b"'<" in data[:128] else data.replace(b"'>", b"'<", 1)
@@ -413,7 +418,7 @@ def _nest(data: bytes, fmt: str, rng: random.Random) -> tuple[bytes, bool, str]:
             lines[i] = f"{k}: " + "[" * levels + v + "]" * levels
             return "\n".join(lines).encode(), levels > 100, f"a value nested {levels} levels"
         return f"deep: {'[' * levels}{']' * levels}\n".encode() + data, levels > 100, f"a key nested {levels} levels"
-    if fmt == "json":
+    if fmt in ("json", "gltf"):
         try:
             obj = json.loads(data)
         except ValueError:

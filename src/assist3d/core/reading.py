@@ -47,9 +47,9 @@ __all__ = [
 
 #: Largest text file read whole (label tables, benchmark prediction lists, mask files, manifests).
 MAX_TEXT_BYTES = 1 << 30
-#: Largest YAML file (configs are a few kB; the pure-Python YAML parser reads about 1 MB/s).
+#: Largest YAML file (configs are a few kB, and YAML values are built in pure Python).
 MAX_YAML_BYTES = 4 << 20
-#: Largest JSON file (a catalog index of 100,000 assets is ~100 MB).
+#: Largest JSON file (a catalog index of the largest import stays far below it).
 MAX_JSON_BYTES = 1 << 30
 #: Deepest nesting of YAML / JSON (the project's own files nest fewer than 10 levels).
 MAX_DEPTH = 100
@@ -57,7 +57,7 @@ MAX_DEPTH = 100
 MAX_YAML_NODES = 1_000_000
 #: Largest array read from one ``.npy`` file or ``.npz`` member (memory-mapped reads aside).
 MAX_ARRAY_BYTES = 16 << 30
-#: Most triangles / vertices of one mesh (a scanned room has ~10^6; an asset ~10^5).
+#: Most triangles / vertices of one mesh (far above a scanned room or an asset).
 MAX_MESH_TRIANGLES = 50_000_000
 MAX_MESH_VERTICES = 50_000_000
 
@@ -105,9 +105,11 @@ def read_bytes(path: str | os.PathLike, *, error: type[AssistError] = DataError,
     _check_size(p, st.st_size, limit, what, error)
     try:
         with open(p, "rb") as f:
-            return f.read() if limit is None else f.read(limit + 1)
+            data = f.read() if limit is None else f.read(limit + 1)
     except OSError as e:
         raise error(f"{_where(p)}: cannot read ({shown(e.strerror or e)})") from None
+    _check_size(p, len(data), limit, what, error)  # it grew since stat
+    return data
 
 
 def decode_text(data: bytes, source: str | os.PathLike, *, error: type[AssistError] = DataError,
@@ -490,14 +492,18 @@ def check_mesh_counts(data: bytes, file_type: str, source: str | os.PathLike, *,
                       error: type[AssistError] = DataError) -> None:
     """Refuse mesh bytes whose header claims more elements than the file can hold, or more than
     :data:`MAX_MESH_VERTICES` / :data:`MAX_MESH_TRIANGLES` (before a loader allocates for them).
-    ``file_type``: ``ply``, ``off``, ``stl`` (other formats: their size bounds their counts). A text
+    ``file_type``: ``ply``, ``off``, ``stl``, ``gltf`` (its JSON: size and depth; other formats: their
+    size bounds their counts). A text
     format (``obj``, ``off``) holding NUL bytes (saved as UTF-16 / UTF-32) is refused too."""
     src = _where(source)
     kind = file_type.lower().lstrip(".")
     if kind in ("obj", "off") and b"\0" in data[:1 << 16]:
         raise error(f"{src}: a text mesh ({kind.upper()}) holding NUL bytes: is it saved as UTF-16 or UTF-32? "
                     "save it as UTF-8 or ASCII")
-    if kind == "ply":
+    if kind == "gltf":  # its JSON within the size and depth bounds (the buffers are separate files)
+        _check_size(Path(os.fspath(source)), len(data), MAX_JSON_BYTES, "glTF file", error)
+        parse_json(data, source, error=error, what="glTF file")
+    elif kind == "ply":
         _ply_counts(data, src, error)
     elif kind == "off":
         _off_counts(data, src, error)
