@@ -558,8 +558,11 @@ def _child(target: Target, folder: Path, w) -> None:
     from assist3d.core.errors import AssistError
 
     handler = _Warnings()
-    logging.getLogger().addHandler(handler)
-    logging.getLogger().setLevel(logging.WARNING)
+    for name in ("", "assist3d"):  # the command line's logger may not propagate to the root
+        lg = logging.getLogger(name)
+        lg.addHandler(handler)
+        lg.setLevel(logging.WARNING)
+        lg.disabled = False
     try:
         target.read(folder)
         res = {"r": "ok", "warnings": handler.lines}
