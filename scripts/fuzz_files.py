@@ -144,6 +144,24 @@ def build_examples(root: Path) -> None:
                          normal=np.zeros((n, 3), np.float32), instance=np.full(n, -1, np.int32),
                          segment=np.full(n, -1, np.int32), valid=np.ones(n, bool))
     (scans / "scan.ply").write_bytes(ply_bytes(sample))
+    # the same scan as a ScanNet scene folder (mesh, over-segmentation, aggregation, label table)
+    from assist3d.bench.data.ply import write_ply
+
+    sn = root / "scannet" / "scans" / "scene0000_00"
+    sn.mkdir(parents=True)
+    faces = np.stack([np.arange(0, n - 2, 3), np.arange(1, n - 1, 3), np.arange(2, n, 3)], axis=1)
+    write_ply(sn / "scene0000_00_vh_clean_2.ply", a[:, :3], np.clip(a[:, 3:6], 0, 255).astype(np.uint8), faces)
+    segs = a[:, 7].astype(int).tolist()
+    (sn / "scene0000_00_vh_clean_2.0.010000.segs.json").write_text(json.dumps({"sceneId": "scene0000_00",
+                                                                                "segIndices": segs}))
+    labels = ("wall", "chair", "table")
+    groups = [{"id": k, "objectId": k, "segments": [s_], "label": labels[k % 3]}
+              for k, s_ in enumerate(sorted(set(segs)))]
+    (sn / "scene0000_00.aggregation.json").write_text(json.dumps({"sceneId": "scannet.scene0000_00",
+                                                                  "segGroups": groups}, indent=1))
+    (root / "scannet" / "scannetv2-labels.combined.tsv").write_text(
+        "id\traw_category\tcategory\tcount\tnyu40id\n1\twall\twall\t10\t1\n2\tchair\tchair\t10\t5\n"
+        "3\ttable\ttable\t10\t7\n")
     # predictions for the dataset's first scene, in both formats
     n0 = len(np.load(root / "dataset" / "scene_000000" / "coord.npy"))
     inst = np.load(root / "dataset" / "scene_000000" / "instance.npy")
@@ -165,7 +183,7 @@ def build_examples(root: Path) -> None:
 
 @dataclass(frozen=True)
 class Target:
-    kind: str  # the table's row: config, catalog, mesh, scan, predictions, checkpoint, dataset
+    kind: str  # the table's row: config, catalog, mesh manifest, mesh, scan, scannet scene, predictions, ...)
     name: str  # e.g. "mesh:chair.glb"
     folder: str  # the example folder copied for each case
     file: str  # the file mutated, relative to the folder
@@ -237,6 +255,12 @@ def _read_dataset(d: Path):
     return out
 
 
+def _read_scannet(d: Path):
+    from assist3d.bench.data import open_dataset
+
+    return [len(s) for s in open_dataset(f"scannet:{d}")]
+
+
 def _read_npz_predictions(d: Path):
     from assist3d.bench.evaluation.predictions import load_predictions
 
@@ -284,6 +308,13 @@ def targets(examples: Path) -> list[Target]:
     out += [
         Target("scan", "scan:scan.npy", "scan", "scan.npy", "npy", _read_scan("scan.npy")),
         Target("scan", "scan:scan.ply", "scan", "scan.ply", "ply", _read_scan("scan.ply")),
+        Target("scannet scene", "scannet:mesh.ply", "scannet", "scans/scene0000_00/scene0000_00_vh_clean_2.ply", "ply",
+               _read_scannet),
+        Target("scannet scene", "scannet:segs.json", "scannet", "scans/scene0000_00/scene0000_00_vh_clean_2.0.010000.segs.json",
+               "json", _read_scannet),
+        Target("scannet scene", "scannet:aggregation.json", "scannet", "scans/scene0000_00/scene0000_00.aggregation.json",
+               "json", _read_scannet),
+        Target("scannet scene", "scannet:labels.tsv", "scannet", "scannetv2-labels.combined.tsv", "text", _read_scannet),
         Target("predictions", "predictions:npz", "predictions", "scene_000000.npz", "npz", _read_npz_predictions),
         Target("predictions", "predictions:txt", "predictions", "txt/scene_000000.txt", "text",
                _read_txt_predictions),

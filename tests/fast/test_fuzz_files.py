@@ -50,7 +50,8 @@ def test_the_same_seed_gives_the_same_cases(fuzz, tmp_path):
         b = module.MUTATE[op](data, "yaml", random.Random("7:3"))
         assert a == b, op
     kinds = {t.kind for t in ts}
-    assert kinds == {"config", "catalog", "mesh manifest", "mesh", "scan", "predictions", "checkpoint", "dataset"}
+    assert kinds == {"config", "catalog", "mesh manifest", "mesh", "scan", "scannet scene", "predictions", "checkpoint",
+                     "dataset"}
     assert {t.fmt for t in ts if t.kind == "mesh"} == {"obj", "glb", "gltf", "ply", "stl", "off"}
     plans = module.plan(ts, 2 * len(ts) * len(module.OPERATORS), 0)
     assert {(p.target.name, p.operator) for p in plans} == {(t.name, op) for t in ts for op in module.OPERATORS}

@@ -226,3 +226,18 @@ def test_checkpoints_that_are_not_archives_or_hold_objects_are_one_line(tmp_path
     with pytest.raises(DataError, match="refused: the file holds objects other than tensors"):
         reading.read_checkpoint(p)
     assert pickle  # the restricted unpickler refused it; nothing ran
+
+
+def test_a_damaged_npy_header_is_one_line_whatever_numpy_raises(tmp_path):
+    """A flipped bit in a header's dict literal made numpy's tokenizer raise TokenError (found by
+    scripts/fuzz_files.py, case 629 of seed 0)."""
+    buf = io.BytesIO()
+    np.save(buf, np.arange(3, dtype=np.float32))
+    raw = bytearray(buf.getvalue())
+    raw[raw.index(b"}")] = ord(" ")  # the dict never closes: numpy's tokenizer raises TokenError
+    p = tmp_path / "a.npz"
+    with zipfile.ZipFile(p, "w") as zf:
+        zf.writestr("scores.npy", bytes(raw))
+    with pytest.raises(DataError) as e:
+        reading.read_npz(p)
+    assert "not a readable .npy array" in _one_line(e, p)

@@ -30,6 +30,7 @@ import math
 import os
 import re
 import stat
+import tokenize
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -258,8 +259,9 @@ def _npy_header(f, source: str, error: type[AssistError], member: str = "") -> t
             shape, fortran, dtype = fmt.read_array_header_2_0(f, max_header_size=1 << 16)
         else:  # pragma: no cover - read_magic refuses other versions
             raise ValueError(f"unknown .npy version {version}")
-    except (ValueError, OSError, EOFError, SyntaxError, TypeError, KeyError) as e:
-        raise error(f"{source}: {member}not a readable .npy array ({shown(e, 160)})") from None
+    except (ValueError, OSError, EOFError, SyntaxError, TypeError, KeyError, tokenize.TokenError) as e:
+        # (numpy parses the header's dict literal with the tokenizer: a damaged one raises any of these)
+        raise error(f"{source}: {member}not a readable .npy array ({type(e).__name__}: {shown(e, 160)})") from None
     if dtype.hasobject:
         raise error(f"{source}: {member}.npy of Python objects (dtype {dtype}); only plain numeric arrays are read, "
                     "never pickles")
