@@ -241,3 +241,20 @@ def test_a_damaged_npy_header_is_one_line_whatever_numpy_raises(tmp_path):
     with pytest.raises(DataError) as e:
         reading.read_npz(p)
     assert "not a readable .npy array" in _one_line(e, p)
+
+
+def test_a_mesh_past_the_triangle_bound_is_skipped_with_its_reason(tmp_path, monkeypatch):
+    """Formats whose header states no count (OBJ, GLB) are bounded once loaded, before normalising."""
+    import json
+
+    from assist3d.assets.catalog import Catalog
+    from assist3d.assets.meshes import import_meshes
+
+    folder = tmp_path / "m"
+    folder.mkdir()
+    (folder / "box.obj").write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\nf 1 2 5\n")
+    (folder / "manifest.json").write_text(json.dumps([{"path": "box.obj", "class": "box", "size": "1,1,1"}]))
+    monkeypatch.setattr(reading, "MAX_MESH_TRIANGLES", 2)
+    report = import_meshes(Catalog(tmp_path / "cat"), folder, folder / "manifest.json", workers=1)
+    assert not any(report.added.values()) and len(report.skipped) == 1
+    assert "box.obj" in report.skipped[0].path and "3 triangles, more than the" in report.skipped[0].reason

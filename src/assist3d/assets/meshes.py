@@ -280,6 +280,9 @@ def _convert(item: MeshItem, label: str) -> tuple[AssetRecord, MeshData] | Skipp
             if len(arrays[1]) == 0 and len(getattr(loaded, "geometry", {}) or {}) > 0:
                 raise MeshRejected("no triangles: the file holds only lines or points")
         v, f, c = arrays
+        if len(f) > reading.MAX_MESH_TRIANGLES or len(v) > reading.MAX_MESH_VERTICES:  # before normalising
+            raise MeshRejected(f"{len(v):,} vertices and {len(f):,} triangles, more than the "
+                               f"{reading.MAX_MESH_VERTICES:,} / {reading.MAX_MESH_TRIANGLES:,} a mesh may have")
         rotation = axes_rotation(item.up, item.front)
         scale = item.scale
         if item.size is None and item.height is not None and len(f):

@@ -42,8 +42,9 @@ from .errors import AssistError, DataError, shown
 
 __all__ = [
     "MAX_TEXT_BYTES", "MAX_YAML_BYTES", "MAX_JSON_BYTES", "MAX_DEPTH", "MAX_YAML_NODES", "MAX_ARRAY_BYTES",
-    "MAX_MESH_TRIANGLES", "MAX_MESH_VERTICES", "read_bytes", "read_text", "decode_text", "problem", "read_json", "parse_json",
-    "read_yaml", "parse_yaml", "read_npy", "read_npz", "read_checkpoint", "check_mesh_counts", "check_nesting",
+    "MAX_MESH_TRIANGLES", "MAX_MESH_VERTICES", "read_bytes", "read_text", "decode_text", "problem", "read_json",
+    "parse_json", "read_yaml", "parse_yaml", "read_npy", "read_npz", "read_checkpoint", "check_mesh_counts",
+    "check_nesting",
 ]
 
 #: Largest text file read whole (label tables, benchmark prediction lists, mask files, manifests).
@@ -438,11 +439,11 @@ def _ply_counts(data: bytes, source: str, error: type[AssistError]) -> None:
                 rec += _PLY_SIZES.get(tok[1], 1)
     shown_counts = ", ".join(f"{k} {v:,}" for k, v in counts.items())
     if least > body:
-        raise error(f"{source}: truncated PLY: its header claims {shown_counts}: at least {least:,} bytes of data, the file holds "
-                    f"{body:,}")
+        raise error(f"{source}: truncated PLY: its header claims {shown_counts}: at least {least:,} bytes of data, "
+                    f"the file holds {body:,}")
     if not binary:  # one line per element, one value per property at least (a list: its length)
         text = data[len(data) - body:]
-        lines = len([ln for ln in text.splitlines() if ln.strip()]) if len(counts) else 0
+        lines = sum(1 for ln in text.splitlines() if ln.strip())
         have = _tokens(text)
         records = sum(counts.values())
         if records > lines or values > have:
@@ -461,7 +462,7 @@ def _off_counts(data: bytes, source: str, error: type[AssistError]) -> None:
             break
     if not words or not words[0].endswith(b"OFF"):
         return
-    nums = words[1:4] if words[0] == b"OFF" or len(words[0]) > 3 else words[1:4]
+    nums = words[1:4]  # OFF, COFF, NOFF, ...: the vertex, face and edge counts follow the keyword
     try:
         v, f = int(nums[0]), int(nums[1])
     except (ValueError, IndexError):
