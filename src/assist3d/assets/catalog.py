@@ -14,7 +14,6 @@ asset id replaces its record (idempotent).
 
 from __future__ import annotations
 
-import json
 import logging
 import threading
 from collections import Counter, OrderedDict
@@ -25,6 +24,7 @@ from typing import Iterable, Sequence
 import numpy as np
 
 from ..core.contracts import GROUPS, AssetRecord, MeshData, SkippedAsset
+from ..core import reading
 from ..core.errors import AssetError, shown
 from ..core.fileio import write_json_atomic, write_npz_atomic
 from ..core.paths import inside
@@ -48,17 +48,20 @@ def save_mesh(path: str | Path, mesh: MeshData) -> None:
 
 def load_mesh_file(path: str | Path) -> MeshData:
     path = Path(path)
+    if not path.exists():
+        raise AssetError(f"{shown(path, 400)}: cached mesh missing; re-run the import")
     try:
-        with np.load(path, allow_pickle=False) as z:
-            return MeshData(
-                vertices=np.array(z["vertices"], dtype=np.float32),
-                faces=np.array(z["faces"], dtype=np.int32),
-                face_colors=np.array(z["face_colors"], dtype=np.uint8),
-            )
-    except FileNotFoundError:
-        raise AssetError(f"{path}: cached mesh missing; re-run the import") from None
-    except (KeyError, ValueError, OSError) as e:
-        raise AssetError(f"{path}: cached mesh unreadable ({e}); re-run the import") from None
+        z = reading.read_npz(path, keys=("vertices", "faces", "face_colors"), error=AssetError, what="cached mesh")
+        return MeshData(
+            vertices=np.array(z["vertices"], dtype=np.float32),
+            faces=np.array(z["faces"], dtype=np.int32),
+            face_colors=np.array(z["face_colors"], dtype=np.uint8),
+        )
+    except AssetError as e:
+        raise AssetError(f"{shown(path, 400)}: cached mesh unreadable ({reading.problem(e, path)}); "
+                         "re-run the import") from None
+    except (TypeError, ValueError, OverflowError) as e:
+        raise AssetError(f"{shown(path, 400)}: cached mesh unreadable ({shown(e)}); re-run the import") from None
 
 
 @dataclass(frozen=True)
@@ -107,9 +110,9 @@ class Catalog:
             raise AssetError(f"{root}: no asset catalog here ({INDEX_NAME} missing); build one with "
                              f"`assist3d assets import sh3d`, `assets import meshes` or `assets procedural`")
         try:
-            data = json.loads(index.read_text(encoding="utf-8"))
-        except (OSError, json.JSONDecodeError) as e:
-            raise AssetError(f"{index}: unreadable catalog index ({e})") from None
+            data = reading.read_json(index, error=AssetError, what="catalog index")
+        except AssetError as e:
+            raise AssetError(f"{shown(index, 400)}: unreadable catalog index ({reading.problem(e, index)})") from None
         if not isinstance(data, dict) or data.get("format") != FORMAT:
             raise AssetError(f"{index}: not an assist3d catalog index (format field missing)")
         try:

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import logging
 import os
 import posixpath
@@ -41,6 +40,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..core.contracts import GROUPS, AssetRecord, MeshData, SkippedAsset
+from ..core import reading
 from ..core.errors import AssetError, shown
 from ..core.fileio import write_json_atomic
 from .catalog import Catalog
@@ -88,17 +88,9 @@ class MeshItem:
 def read_manifest(manifest: str | os.PathLike) -> list[dict[str, Any]]:
     """Rows of a CSV or JSON manifest as dicts (keys lower-cased); AssetError if unreadable."""
     manifest = Path(manifest)
-    try:
-        text = manifest.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise AssetError(f"{manifest}: manifest not found") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise AssetError(f"{manifest}: manifest unreadable ({e})") from None
+    text = reading.read_text(manifest, error=AssetError, missing="manifest not found", what="manifest")
     if manifest.suffix.lower() == ".json" or text.lstrip().startswith(("[", "{")):
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as e:
-            raise AssetError(f"{manifest}: invalid JSON ({e})") from None
+        data = reading.parse_json(text, manifest, error=AssetError, what="manifest")
         if isinstance(data, dict):
             data = data.get("assets")
         if not isinstance(data, list):
@@ -109,7 +101,11 @@ def read_manifest(manifest: str | os.PathLike) -> list[dict[str, Any]]:
         reader = csv.DictReader(io.StringIO(text))
         if not reader.fieldnames or "path" not in [f.strip().lower() for f in reader.fieldnames]:
             raise AssetError(f"{manifest}: CSV header must name at least the columns 'path' and 'class'")
-        rows = [{(k or "").strip().lower(): (v.strip() if isinstance(v, str) else v) for k, v in r.items()} for r in reader]
+        try:
+            rows = [{(k or "").strip().lower(): (v.strip() if isinstance(v, str) else v) for k, v in r.items()}
+                    for r in reader]
+        except csv.Error as e:
+            raise AssetError(f"{shown(manifest, 400)}: malformed CSV ({shown(e)})") from None
     if len(rows) > MAX_ROWS:
         raise AssetError(f"{manifest}: {len(rows)} rows, more than the limit of {MAX_ROWS}")
     return rows
@@ -230,7 +226,7 @@ def _folder_resolver(folder: Path, base: str):
 
         def get(self, name: str) -> bytes:
             rel = safe_relative_path(folder, posixpath.join(self.base, str(name).replace("\\", "/")))
-            return (folder / rel).read_bytes()
+            return reading.read_bytes(folder / rel, error=AssetError)
 
         def write(self, name: str, data: bytes) -> None:
             raise OSError("read-only folder")
@@ -260,10 +256,11 @@ def _convert(item: MeshItem, label: str) -> tuple[AssetRecord, MeshData] | Skipp
 
     folder = Path(item.folder)
     try:
-        data = (folder / item.path).read_bytes()
+        data = reading.read_bytes(folder / item.path, error=AssetError)
         if not data.strip():
             raise MeshRejected("empty file")
         ext = FORMATS[item.path.rsplit(".", 1)[-1].lower()]
+        reading.check_mesh_counts(data, ext, folder / item.path, error=AssetError)
         resolver = _folder_resolver(folder, posixpath.dirname(item.path))
         arrays = None
         if ext == "obj":
@@ -283,6 +280,9 @@ def _convert(item: MeshItem, label: str) -> tuple[AssetRecord, MeshData] | Skipp
             if len(arrays[1]) == 0 and len(getattr(loaded, "geometry", {}) or {}) > 0:
                 raise MeshRejected("no triangles: the file holds only lines or points")
         v, f, c = arrays
+        if len(f) > reading.MAX_MESH_TRIANGLES or len(v) > reading.MAX_MESH_VERTICES:  # before normalising
+            raise MeshRejected(f"{len(v):,} vertices and {len(f):,} triangles, more than the "
+                               f"{reading.MAX_MESH_VERTICES:,} / {reading.MAX_MESH_TRIANGLES:,} a mesh may have")
         rotation = axes_rotation(item.up, item.front)
         scale = item.scale
         if item.size is None and item.height is not None and len(f):
@@ -293,6 +293,8 @@ def _convert(item: MeshItem, label: str) -> tuple[AssetRecord, MeshData] | Skipp
         norm = normalize_arrays(v, f, c, rotation=rotation, size=item.size, scale=scale)
     except MeshRejected as e:
         return SkippedAsset(label, str(e))
+    except AssetError as e:
+        return SkippedAsset(label, reading.problem(e, folder / item.path))
     except OSError as e:
         return SkippedAsset(label, f"unreadable file ({e})")
     w, d, h = norm.size

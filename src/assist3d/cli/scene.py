@@ -11,6 +11,7 @@ import typer
 
 from ..core.bounds import MAX_SCENE_INDEX, MAX_SEED
 from ..core.contracts import SceneLayout
+from ..core import reading
 from ..core.errors import DataError, shown
 from ..core.fileio import write_json_atomic
 from ..config.presets import compose
@@ -94,12 +95,10 @@ def layout_png_cmd(
     from ..assets import open_catalog
     from ..export.topdown import render_topdown
 
+    data = reading.read_json(layout_json, missing="layout file not found", what="layout")
     try:
-        data = json.loads(layout_json.read_text(encoding="utf-8"))
         layout = SceneLayout.from_json(data)
-    except FileNotFoundError:
-        raise DataError(f"{layout_json}: layout file not found") from None
-    except (OSError, json.JSONDecodeError, KeyError, TypeError, ValueError) as e:
+    except (KeyError, TypeError, ValueError, AttributeError, IndexError) as e:
         raise DataError(f"{layout_json}: not a readable layout.json ({type(e).__name__}: {shown(e)})") from None
     _check_finite(layout, layout_json)
     catalog = open_catalog(assets)

@@ -13,6 +13,7 @@ from pydantic import BaseModel, ValidationError
 
 from ..core.errors import ConfigError, shown
 from ..core.fileio import write_text_atomic
+from ..core.reading import read_yaml
 from .sections import GenerateConfig
 
 M = TypeVar("M", bound=BaseModel)
@@ -61,19 +62,7 @@ def read_yaml_mapping(path: str | Path, *, missing: str = "config file not found
     """The mapping at the top of YAML file ``path`` (empty file: ``{}``); a :class:`ConfigError`
     naming the file when it is absent (``missing`` says what to do), not YAML, or not a mapping."""
     p = Path(path)
-    if not p.is_file():
-        raise ConfigError(f"{p}: {missing}")
-    try:
-        loaded = yaml.safe_load(p.read_text(encoding="utf-8"))
-    except yaml.YAMLError as e:
-        raise ConfigError(f"{p}: not valid YAML ({e})") from None
-    except UnicodeDecodeError as e:
-        raise ConfigError(f"{p}: not UTF-8 text (byte {e.start} is {e.object[e.start:e.start + 1]!r}); "
-                          "save the config as UTF-8 YAML") from None
-    except RecursionError:
-        raise ConfigError(f"{p}: nested too deeply to be a configuration") from None
-    except OSError as e:
-        raise ConfigError(f"{p}: cannot read ({e.strerror or e})") from None
+    loaded = read_yaml(p, error=ConfigError, missing=missing, what="configuration")
     if loaded is not None and not isinstance(loaded, dict):
         raise ConfigError(f"{p}: expected a mapping at the top level, got {type(loaded).__name__}")
     return loaded or {}

@@ -16,7 +16,8 @@ from pathlib import Path
 
 from .. import __version__
 from ..config import GenerateConfig, config_to_dict
-from ..core.errors import DataError
+from ..core import reading
+from ..core.errors import DataError, shown
 from ..core.fileio import write_json_atomic
 from ..core.records import manifest_entry
 
@@ -48,11 +49,9 @@ def read_manifest(root: str | Path, *, fix: str = "") -> dict | None:
     if not path.is_file():
         return None
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as e:
-        raise DataError(f"{path}: unreadable manifest ({e}){fix}") from None
-    except RecursionError:
-        raise DataError(f"{path}: unreadable manifest (nested too deeply){fix}") from None
+        data = reading.read_json(path, what="manifest")
+    except DataError as e:
+        raise DataError(f"{shown(path, 400)}: unreadable manifest ({reading.problem(e, path)}){fix}") from None
     if not isinstance(data, dict):
         raise DataError(f"{path}: unreadable manifest (expected a JSON object, got {type(data).__name__}){fix}")
     return data

@@ -9,14 +9,14 @@ near walls vanish and the furniture inside is visible. Everything comes from the
 from __future__ import annotations
 
 import io
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
 from ..core.contracts import SceneLayout, group_kind
-from ..core.errors import DataError
+from ..core import reading
+from ..core.errors import DataError, shown
 from ..core.fileio import write_bytes_atomic
 from .ply import BACKGROUND_RGB, instance_colors
 from .writer import load_scene_arrays
@@ -167,8 +167,10 @@ def render_preview(scene_dir: str | Path, out_png: str | Path, *, seed: int = 0)
     d = Path(scene_dir)
     arrays = load_scene_arrays(d)
     try:
-        layout = SceneLayout.from_json(json.loads((d / "layout.json").read_text(encoding="utf-8")))
-    except (OSError, ValueError, KeyError) as e:
+        layout = SceneLayout.from_json(reading.read_json(d / "layout.json", what="layout"))
+    except DataError as e:
+        raise DataError(f"{shown(d / 'layout.json', 400)}: unreadable layout ({reading.problem(e, d / 'layout.json')})") from None
+    except (ValueError, KeyError, TypeError, AttributeError, IndexError) as e:
         raise DataError(f"{d / 'layout.json'}: unreadable layout ({e})") from None
     coord, normal = arrays["coord"].astype(np.float64), arrays["normal"].astype(np.float64)
     instance, color = arrays["instance"], arrays["color"]

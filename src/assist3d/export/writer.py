@@ -22,7 +22,8 @@ from typing import Callable
 import numpy as np
 
 from ..core.contracts import PointSample, SceneLayout
-from ..core.errors import DataError
+from ..core import reading
+from ..core.errors import DataError, shown
 from ..core.fileio import write_bytes_atomic, write_json_atomic
 from ..core.paths import inside
 from .labels import scannet_segments
@@ -112,9 +113,11 @@ def read_scene_meta(scene_dir: str | Path, *, check_files: bool = True) -> dict 
     """The completion marker of a scene folder, or None if the scene is absent or incomplete
     (no marker, unreadable marker, or a listed file missing or changed)."""
     d = Path(scene_dir)
+    if not (d / META_NAME).exists():
+        return None
     try:
-        meta = json.loads((d / META_NAME).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        meta = reading.read_json(d / META_NAME)
+    except DataError:
         return None
     if not isinstance(meta, dict) or meta.get("format") != MARKER_FORMAT or not isinstance(meta.get("files"), dict):
         return None
@@ -130,17 +133,17 @@ def read_scene_meta(scene_dir: str | Path, *, check_files: bool = True) -> dict 
 
 
 def load_scene_arrays(scene_dir: str | Path) -> dict[str, np.ndarray]:
-    """Load a scene folder's arrays with plain ``np.load`` and check dtypes and shapes."""
+    """Load a scene folder's arrays (no pickles, headers checked) and check dtypes and shapes."""
     d = Path(scene_dir)
     out: dict[str, np.ndarray] = {}
     for name, (dtype, cols) in ARRAYS.items():
         p = d / f"{name}.npy"
+        if not p.exists():
+            raise DataError(f"{shown(p, 400)}: missing; regenerate the scene")
         try:
-            a = np.load(p, allow_pickle=False)
-        except FileNotFoundError:
-            raise DataError(f"{p}: missing; regenerate the scene") from None
-        except (ValueError, OSError) as e:
-            raise DataError(f"{p}: unreadable ({e}); regenerate the scene") from None
+            a = reading.read_npy(p)
+        except DataError as e:
+            raise DataError(f"{shown(p, 400)}: unreadable ({reading.problem(e, p)}); regenerate the scene") from None
         if a.dtype != np.dtype(dtype) or (cols and (a.ndim != 2 or a.shape[1] != cols)) or (not cols and a.ndim != 1):
             raise DataError(f"{p}: expected {dtype} {'(N, %d)' % cols if cols else '(N,)'}, got {a.dtype} {a.shape}")
         out[name] = a

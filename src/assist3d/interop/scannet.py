@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import logging
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import ExitStack
@@ -37,6 +36,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..core import reading
 from ..core.errors import DataError
 from ..core.fileio import write_bytes_atomic, write_json_atomic, write_text_atomic
 from ..core.taxonomy.scannet import SURFACES, ScanNetLabel, scannet_label, surface_label
@@ -112,12 +112,12 @@ def scene_with_room(data: Path, scene_id: str, classes: list[str]) -> dict:
     """A generated scene's arrays with its room height and class list (``layout.json``), for the exporters."""
     d = data / scene_id
     arrays = load_scene_arrays(d)
+    layout = reading.read_json(d / "layout.json", what="layout")
     try:
-        layout = json.loads((d / "layout.json").read_text(encoding="utf-8"))
         height = float(layout["room"]["height"])
         classes = list(layout.get("classes") or classes)
-    except (OSError, ValueError, KeyError, TypeError) as e:
-        raise DataError(f"{d / 'layout.json'}: unreadable room height ({e}); regenerate the scene") from None
+    except (ValueError, KeyError, TypeError, AttributeError) as e:
+        raise DataError(f"{d / 'layout.json'}: unreadable room height ({type(e).__name__}: {e}); regenerate the scene") from None
     return {**arrays, "height": height, "classes": classes}
 
 

@@ -28,9 +28,6 @@ from __future__ import annotations
 
 import io
 import json
-import pickle
-import re
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -38,7 +35,8 @@ from typing import Any, Literal
 import torch
 import torch.nn.functional as F
 
-from ..core.errors import DataError
+from ..core import reading
+from ..core.errors import DataError, shown
 from ..core.fileio import write_bytes_atomic
 
 FORMAT_PREFIX = "assist3d-"
@@ -124,22 +122,13 @@ def write_checkpoint(path: str | Path, ckpt: Checkpoint, *, precision: Precision
 
 
 def load_payload(path: str | Path, device: str = "cpu") -> Any:
-    """``torch.load`` of ``path`` with ``weights_only``: one-line :class:`DataError` for a missing,
-    unreadable or code-carrying file."""
+    """``torch.load`` of ``path`` with ``weights_only`` through the reading layer
+    (:func:`assist3d.core.reading.read_checkpoint`): one-line :class:`DataError` for a missing, unreadable
+    or code-carrying file."""
     path = Path(path)
-    if not path.is_file():
-        raise DataError(f"{path}: checkpoint not found" + (" (it is a folder)" if path.is_dir() else ""))
-    if not zipfile.is_zipfile(path):
-        raise DataError(f"{path}: not a readable checkpoint (not a PyTorch archive)")
-    try:
-        return torch.load(path, map_location=device, weights_only=True)
-    except pickle.UnpicklingError as e:
-        found = re.search(r"Unsupported global: GLOBAL ([\w.]+)", str(e))
-        what = f": {found.group(1)}" if found else ""
-        raise DataError(f"{path}: refused: the file holds objects other than tensors and numbers{what}; "
-                        "loading it could run code") from None
-    except (RuntimeError, EOFError, OSError, ValueError, zipfile.BadZipFile, KeyError, AttributeError) as e:
-        raise DataError(f"{path}: not a readable checkpoint ({type(e).__name__})") from None
+    if path.is_dir():
+        raise DataError(f"{path}: checkpoint not found (it is a folder)")
+    return reading.read_checkpoint(path, map_location=device)
 
 
 def _json(path: Path, payload: dict, key: str, what: str) -> dict:
@@ -147,9 +136,9 @@ def _json(path: Path, payload: dict, key: str, what: str) -> dict:
     if not isinstance(raw, str):
         raise DataError(f"{path}: not an {what} ({key!r} is not a JSON string)")
     try:
-        value = json.loads(raw)
-    except json.JSONDecodeError as e:
-        raise DataError(f"{path}: not an {what} ({key!r} is not valid JSON: {e})") from None
+        value = reading.parse_json(raw, path)
+    except DataError as e:
+        raise DataError(f"{shown(path, 400)}: not an {what} ({key!r}: {reading.problem(e, path)})") from None
     if not isinstance(value, dict):
         raise DataError(f"{path}: not an {what} ({key!r} is not a JSON object)")
     return value

@@ -16,6 +16,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ..core import reading
+from ..core.errors import DataError
 from ..core.fileio import write_json_atomic
 from ..core.paths import cache_root
 
@@ -58,21 +60,16 @@ class ResponseCache:
     def get(self, key: str) -> CachedAnswer | None:
         """The stored answer for ``key`` or None. A corrupt entry is ignored (and logged)."""
         p = self.path(key)
-        try:
-            raw = p.read_text(encoding="utf-8")
-        except FileNotFoundError:
-            return None
-        except OSError as e:
-            log.warning("%s: unreadable cache entry (%s); ignoring it", p, e)
+        if not p.exists():
             return None
         try:
-            d = json.loads(raw)
+            d = reading.read_json(p)
             if d.get("key") != key or not isinstance(d.get("content"), str):
                 raise ValueError("key or content missing")
             usage = d.get("usage") or {}
             return CachedAnswer(d["content"], int(usage.get("prompt_tokens", 0)),
                                 int(usage.get("completion_tokens", 0)), str(d.get("finish_reason", "")))
-        except (ValueError, TypeError, AttributeError) as e:
+        except (DataError, ValueError, TypeError, AttributeError) as e:
             log.warning("%s: corrupt cache entry (%s); ignoring it", p, e)
             return None
 

@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.contracts import Room
+from ..core import reading
 from ..core.errors import ConfigError
 
 TEMPLATE_FILES = {"floor": "floor.txt", "wall": "wall.txt", "on": "on_top.txt", "on_batch": "on_top_batch.txt",
@@ -82,10 +83,7 @@ def load_template(name: str, prompt_dir: str | Path | None = None) -> Template:
     if prompt_dir:
         p = Path(prompt_dir).expanduser() / fname
         if p.is_file():
-            try:
-                return parse_template(p.read_text(encoding="utf-8"), str(p))
-            except (OSError, UnicodeDecodeError) as e:
-                raise ConfigError(f"{p}: cannot read the prompt template ({e})") from None
+            return parse_template(reading.read_text(p, error=ConfigError, what="prompt template"), str(p))
         if not Path(prompt_dir).expanduser().is_dir():
             raise ConfigError(f"llm.prompt_dir {prompt_dir}: not a folder")
     res = resources.files("assist3d") / "resources" / "prompts" / fname

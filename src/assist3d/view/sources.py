@@ -4,7 +4,6 @@ segment`` / ``assist3d predict`` (a ``.npz`` of masks and scores), optionally ov
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -14,6 +13,7 @@ from ..bench.data import READERS, open_dataset
 from ..bench.data.ply import read_ply
 from ..bench.data.scanfile import read_scan
 from ..bench.evaluation.predictions import load_predictions
+from ..core import reading
 from ..core.errors import ConfigError, DataError, shown
 from ..export.preview import find_scene_dir
 from ..export.writer import load_scene_arrays
@@ -93,8 +93,8 @@ def _generated_scene(path: Path, scene: str | None) -> ViewData:
     arrays = load_scene_arrays(d)
     names: tuple[str, ...] = ()
     try:
-        names = tuple(str(c) for c in json.loads((d / "layout.json").read_text(encoding="utf-8")).get("classes") or ())
-    except (OSError, ValueError, AttributeError, RecursionError):
+        names = tuple(str(c) for c in reading.read_json(d / "layout.json", what="layout").get("classes") or ())
+    except (DataError, AttributeError, TypeError):
         pass  # the classes then show as numbers
     return ViewData(name=d.name, coord=arrays["coord"], rgb=arrays["color"], instance=arrays["instance"],
                     klass=arrays["segment"], class_names=names,
@@ -115,8 +115,8 @@ def _dataset_scene(spec: str, scene: str | None) -> ViewData:
     names = _class_names_for(ds.format)
     if ds.format == "assist3d":
         try:
-            names = tuple(json.loads((ds.root / "manifest.json").read_text(encoding="utf-8"))["classes"])
-        except (OSError, ValueError, KeyError, TypeError, RecursionError):
+            names = tuple(reading.read_json(ds.root / "manifest.json", what="manifest")["classes"])
+        except (DataError, KeyError, TypeError):
             names = ()
     return ViewData(name=sid, coord=s.coord, rgb=s.color, instance=s.instance, klass=s.segment,
                     class_names=names, notes=(f"{ds.format} scene {sid} of {shown(spec, 200)}",))

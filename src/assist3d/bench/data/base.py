@@ -8,15 +8,14 @@ cleaned with one warning that says how many points changed.
 
 from __future__ import annotations
 
-import json
 import logging
-import math
 from pathlib import Path
 from typing import Any, Iterator
 
 import numpy as np
 
 from ...core.contracts import PointSample
+from ...core import reading
 from ...core.errors import ConfigError, DataError, shown
 
 log = logging.getLogger(__name__)
@@ -97,15 +96,9 @@ def object_policy(dataset: str, value: str) -> str:
 
 
 def read_json(path: Path) -> Any:
-    """Parse a JSON file; a missing or malformed file raises :class:`DataError` naming it."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as e:
-        raise DataError(f"{path}: cannot read ({e.strerror or e})") from None
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as e:
-        raise DataError(f"{path}: bad JSON at line {e.lineno} column {e.colno}: {e.msg}") from None
+    """Parse a JSON file; a missing, malformed, oversized or over-nested file raises
+    :class:`DataError` naming it (see :mod:`assist3d.core.reading`)."""
+    return reading.read_json(path)
 
 
 def require_key(path: Path, obj: Any, key: str, kind: type | tuple[type, ...]) -> Any:
@@ -119,42 +112,10 @@ def require_key(path: Path, obj: Any, key: str, kind: type | tuple[type, ...]) -
 
 
 def read_npy(path: Path, *, mmap: bool = False) -> np.ndarray:
-    """Load a ``.npy`` file without pickles; problems raise :class:`DataError` naming the file.
-
-    The header is checked first: object arrays (pickles) are refused, and so is a file shorter
-    than its header's shape says (truncated, or a forged shape that would allocate terabytes).
-    """
-    if not path.is_file():
-        raise DataError(f"{path}: file not found")
-    _check_npy_header(path)
-    try:
-        return np.load(path, allow_pickle=False, mmap_mode="r" if mmap else None)
-    except (ValueError, OSError, EOFError) as e:
-        raise DataError(f"{path}: cannot load .npy ({e})") from None
-    except MemoryError:
-        raise DataError(f"{path}: .npy array too large to load into memory") from None
-
-
-def _check_npy_header(path: Path) -> None:
-    fmt = np.lib.format
-    try:
-        with open(path, "rb") as f:
-            version = fmt.read_magic(f)
-            if version not in ((1, 0), (2, 0)):
-                return  # other versions (UTF-8 field names): np.load decides
-            read = fmt.read_array_header_1_0 if version == (1, 0) else fmt.read_array_header_2_0
-            shape, _fortran, dtype = read(f)
-            offset = f.tell()
-    except (ValueError, OSError, EOFError) as e:
-        raise DataError(f"{path}: cannot load .npy ({e})") from None
-    if dtype.hasobject:
-        raise DataError(f"{path}: .npy of Python objects (dtype {dtype}); only plain numeric arrays are read, "
-                        "never pickles")
-    need = math.prod(shape) * dtype.itemsize
-    have = path.stat().st_size - offset
-    if need > have:
-        raise DataError(f"{path}: truncated .npy: shape {shape} of {dtype} needs {need} bytes of data, "
-                        f"the file holds {have}")
+    """Load a ``.npy`` file without pickles; problems raise :class:`DataError` naming the file
+    (object arrays, truncated files and forged shapes are refused from the header: see
+    :func:`assist3d.core.reading.read_npy`)."""
+    return reading.read_npy(path, mmap=mmap)
 
 
 # ------------------------------------------------------------------------------------------------

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...core import reading
 from ...core.errors import DataError, shown
 from ...core.fileio import write_bytes_atomic
 from .base import checked_coords, clean_colors, clean_normals
@@ -149,11 +150,9 @@ def read_ply(path: str | Path, *, faces: bool = False) -> PlyMesh:
     ``faces``) non-triangular faces.
     """
     path = Path(path)
-    try:
-        data = path.read_bytes()
-    except OSError as e:
-        raise DataError(f"{path}: cannot read PLY file ({e.strerror or e})") from None
+    data = reading.read_bytes(path, what="PLY file")
     fmt, elements, offset = _parse_header(path, data[:_MAX_HEADER_BYTES])
+    reading.check_mesh_counts(data, "ply", path)
     if not any(e.name == "vertex" for e in elements):
         raise DataError(f"{path}: PLY file has no 'vertex' element")
     if fmt == "ascii":

@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.contracts import PointSample
+from ...core import reading
 from ...core.errors import ConfigError, DataError, shown
 from ...core.fileio import write_bytes_atomic
 from ...core.paths import cache_root
@@ -70,10 +71,7 @@ def _room_dirs(root: Path) -> dict[str, Path]:
 
 def read_s3dis_txt(path: Path) -> np.ndarray:
     """One annotation file as an ``(n, 6) float32`` array, tolerating stray characters."""
-    try:
-        raw = path.read_bytes()
-    except OSError as e:
-        raise DataError(f"{path}: cannot read ({e.strerror or e})") from None
+    raw = reading.read_bytes(path, limit=reading.MAX_TEXT_BYTES, what="S3DIS annotation file")
     if _STRAY.search(raw) is not None:
         for m in _STRAY.finditer(raw):
             line = raw.count(b"\n", 0, m.start()) + 1
@@ -118,12 +116,12 @@ class S3DISDataset(SceneDataset):
         path = cache_root() / "s3dis" / f"{scene_id}-{h.hexdigest()}.npz"
         if path.is_file():
             try:
-                with np.load(path, allow_pickle=False) as z:
-                    n = len(z["coord"])
-                    return PointSample(scene_id=scene_id, coord=z["coord"], color=z["color"],
-                                       normal=np.zeros((n, 3), np.float32), instance=z["instance"],
-                                       segment=z["segment"], valid=np.ones(n, bool))
-            except (OSError, ValueError, KeyError, EOFError) as e:
+                z = reading.read_npz(path, keys=("coord", "color", "instance", "segment"))
+                n = len(z["coord"])
+                return PointSample(scene_id=scene_id, coord=z["coord"], color=z["color"],
+                                   normal=np.zeros((n, 3), np.float32), instance=z["instance"],
+                                   segment=z["segment"], valid=np.ones(n, bool))
+            except (DataError, ValueError, TypeError) as e:
                 log.warning("%s: unreadable cache entry, parsing again (%s)", path, e)
         sample = self._parse(scene_id, anno)
         buf = io.BytesIO()

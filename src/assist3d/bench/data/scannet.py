@@ -18,6 +18,7 @@ order; normals are the mesh's area-weighted vertex normals.
 from __future__ import annotations
 
 import csv
+import io
 import logging
 from functools import lru_cache
 from pathlib import Path
@@ -25,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.contracts import PointSample
+from ...core import reading
 from ...core.errors import DataError, shown
 from .base import SceneDataset, instances_from_groups, integer_list, object_policy, read_json, require_key
 from .ply import read_scan_mesh
@@ -43,11 +45,11 @@ STRUCTURE_NYU40: tuple[int, ...] = (1, 2, 22)
 @lru_cache(maxsize=8)
 def read_label_map(path: Path) -> dict[str, int]:
     """``raw_category -> nyu40id`` from ``scannetv2-labels.combined.tsv``."""
+    text = reading.read_text(path, what="label map")
     try:
-        with open(path, newline="", encoding="utf-8") as f:
-            rows = list(csv.reader(f, delimiter="\t"))
-    except OSError as e:
-        raise DataError(f"{path}: cannot read label map ({e.strerror or e})") from None
+        rows = list(csv.reader(io.StringIO(text, newline=""), delimiter="\t"))
+    except csv.Error as e:
+        raise DataError(f"{shown(path, 400)}: malformed label map ({shown(e)})") from None
     if not rows:
         raise DataError(f"{path}: empty label map")
     header = rows[0]

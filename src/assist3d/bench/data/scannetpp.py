@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.contracts import PointSample
+from ...core import reading
 from ...core.errors import DataError, shown
 from .base import SceneDataset, instances_from_groups, integer_list, read_json, require_key
 from .ply import read_scan_mesh
@@ -87,7 +88,7 @@ class ScanNetPPDataset(SceneDataset):
 
 def _read_mask(path: Path, n: int) -> np.ndarray:
     """Vertex indices listed one per line (blank file = nothing ignored)."""
-    text = path.read_bytes().split()
+    text = reading.read_bytes(path, limit=reading.MAX_TEXT_BYTES, what="ignore mask").split()
     try:
         idx = np.array(text, dtype=np.int64) if text else np.zeros(0, np.int64)
     except ValueError as e:

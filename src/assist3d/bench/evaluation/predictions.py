@@ -15,11 +15,11 @@ from __future__ import annotations
 
 import io
 import logging
-import zipfile
 from pathlib import Path
 
 import numpy as np
 
+from ...core import reading
 from ...core.errors import DataError, shown
 from ...core.fileio import write_bytes_atomic, write_text_atomic
 from ...core.paths import inside, safe_name
@@ -66,12 +66,10 @@ def load_predictions(path: str | Path, n_points: int | None = None) -> tuple[np.
     if not path.is_file():
         raise DataError(f"{path}: prediction file not found")
     try:
-        with np.load(path, allow_pickle=False) as z:
-            if "masks" not in z or "scores" not in z:
-                raise DataError(f"{path}: expected keys 'masks' and 'scores', found {sorted(z.files)}")
-            masks, scores = z["masks"], z["scores"]
-    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as e:  # a truncated .npz is a bad zip
-        raise DataError(f"{path}: cannot read prediction npz ({shown(e)})") from None
+        z = reading.read_npz(path, keys=("masks", "scores"), what="prediction npz")
+    except DataError as e:
+        raise DataError(f"{shown(path, 400)}: cannot read prediction npz ({reading.problem(e, path)})") from None
+    masks, scores = z["masks"], z["scores"]
     if masks.ndim == 1 and masks.size == 0:
         masks = masks.reshape(0, n_points or 0)
     return _validated(path, masks, scores, n_points)
@@ -101,10 +99,7 @@ def export_scannet_txt(out_dir: str | Path, scene_id: str, masks: np.ndarray, sc
 
 
 def _read_mask_file(path: Path, n_points: int | None) -> np.ndarray:
-    try:
-        raw = path.read_bytes()
-    except OSError as e:
-        raise DataError(f"{path}: cannot read mask file ({e.strerror or e})") from None
+    raw = reading.read_bytes(path, limit=reading.MAX_TEXT_BYTES, what="mask file")
     arr = np.frombuffer(raw, np.uint8)
     if len(arr) % 2 == 0 and np.all(arr[1::2] == ord("\n")) and np.all((arr[0::2] == ord("0")) | (arr[0::2] == ord("1"))):
         mask = arr[0::2] == ord("1")
@@ -121,12 +116,7 @@ def _read_mask_file(path: Path, n_points: int | None) -> np.ndarray:
 def import_scannet_txt(path: str | Path, n_points: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Read one scene's benchmark ``.txt`` and its mask files into ``(masks, scores)``."""
     path = Path(path)
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except OSError as e:
-        raise DataError(f"{path}: cannot read ({e.strerror or e})") from None
-    except UnicodeDecodeError as e:
-        raise DataError(f"{path}: not UTF-8 text (byte {e.start}); expected benchmark prediction lines") from None
+    lines = reading.read_text(path, what="benchmark prediction list").splitlines()
     masks: list[np.ndarray] = []
     scores: list[float] = []
     for line_no, line in enumerate(lines, start=1):

@@ -10,7 +10,8 @@ import numpy as np
 from scipy.cluster.vq import kmeans2
 
 from ...assets.catalog import Catalog
-from ...core.errors import AssetError
+from ...core import reading
+from ...core.errors import AssetError, DataError
 from ...core.fileio import write_npz_atomic
 from ...core.rng import make_rng
 from .features import FEATURE_DIM, mesh_descriptor
@@ -30,11 +31,11 @@ def asset_features(catalog: Catalog, *, seed: int = 0) -> tuple[list[str], np.nd
     cached: dict[str, np.ndarray] = {}
     if path.is_file():
         try:
-            with np.load(path) as z:
-                # caches written before 0-d arrays were kept as such hold the seed as shape (1,)
-                if int(np.asarray(z["seed"]).reshape(-1)[0]) == seed and z["features"].shape[1:] == (FEATURE_DIM,):
-                    cached = dict(zip(z["ids"].tolist(), z["features"]))
-        except (OSError, KeyError, ValueError):
+            z = reading.read_npz(path, keys=("seed", "features", "ids"))
+            # caches written before 0-d arrays were kept as such hold the seed as shape (1,)
+            if int(np.asarray(z["seed"]).reshape(-1)[0]) == seed and z["features"].shape[1:] == (FEATURE_DIM,):
+                cached = dict(zip(z["ids"].tolist(), z["features"]))
+        except (DataError, IndexError, TypeError, ValueError):
             log.warning("%s: unreadable feature cache, recomputing", path)
     ids, feats, dirty = [], [], False
     for rec in catalog.records:

@@ -12,7 +12,6 @@ in nats; the maximum is ln K (K = 64 codes: 4.16).
 
 from __future__ import annotations
 
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
@@ -21,6 +20,7 @@ import numpy as np
 from scipy.cluster.vq import kmeans2
 from scipy.spatial import cKDTree
 
+from ...core import reading
 from ...core.errors import DataError, shown
 from ...core.fileio import write_npz_atomic
 
@@ -49,10 +49,10 @@ class Codebook:
     @staticmethod
     def load(path: str | Path) -> "Codebook":
         try:
-            with np.load(path, allow_pickle=False) as z:
-                return Codebook(z["centers"], z["mean"], z["scale"])
-        except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as e:  # truncated: a bad zip
-            raise DataError(f"{path}: not a codebook file ({shown(e)})") from None
+            z = reading.read_npz(path, keys=("centers", "mean", "scale"), what="codebook file")
+        except DataError as e:
+            raise DataError(f"{shown(path, 400)}: not a codebook file ({reading.problem(e, path)})") from None
+        return Codebook(z["centers"], z["mean"], z["scale"])
 
 
 def fit_codebook(features: np.ndarray, *, k: int = DEFAULT_CODES, rng: np.random.Generator) -> Codebook:

@@ -46,7 +46,6 @@ about twice their combined standard error are not told apart by it.
 
 from __future__ import annotations
 
-import json
 import logging
 from dataclasses import dataclass, field
 from importlib import resources
@@ -57,7 +56,8 @@ from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from ..data import READERS, open_dataset, parse_spec
-from ...core.errors import DataError
+from ...core import reading
+from ...core.errors import DataError, shown
 
 VOXEL = 0.05
 CELL = 0.10  # floor-plan grid for coverage and free space
@@ -312,12 +312,14 @@ class RealismReference:
         """The reference in ``path``, or the shipped one (real ScanNet scans)."""
         if path is None:
             text = resources.files("assist3d").joinpath("resources", "realism", "scannet-dev.json").read_text(encoding="utf-8")
-            return cls.from_json(json.loads(text), "assist3d/resources/realism/scannet-dev.json")
+            return cls.from_json(reading.parse_json(text, "assist3d/resources/realism/scannet-dev.json"),
+                                 "assist3d/resources/realism/scannet-dev.json")
         p = Path(path)
         try:
-            return cls.from_json(json.loads(p.read_text()), str(p))
-        except (OSError, json.JSONDecodeError) as e:
-            raise DataError(f"{p}: unreadable layout realism reference ({e})") from None
+            data = reading.read_json(p, what="layout realism reference")
+        except DataError as e:
+            raise DataError(f"{shown(p, 400)}: unreadable layout realism reference ({reading.problem(e, p)})") from None
+        return cls.from_json(data, str(p))
 
 
 def _ks_to_quantiles(values: np.ndarray, ref_q: np.ndarray) -> float:

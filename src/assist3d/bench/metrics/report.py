@@ -3,7 +3,6 @@ layout reasonability, on any dataset a reader understands (synthetic or real).""
 
 from __future__ import annotations
 
-import json
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -15,7 +14,8 @@ from ...assets import open_catalog
 from ...assets.catalog import Catalog
 from ...core.contracts import SceneLayout
 from ..data import open_dataset
-from ...core.errors import AssistError, DataError
+from ...core import reading
+from ...core.errors import AssistError, DataError, shown
 from ...export.manifest import read_manifest
 from ...core.fileio import atomic_path
 from .vlm import vlm_layout_score
@@ -154,9 +154,11 @@ def _load_layout(scene_dir: Path) -> SceneLayout | None:
     if not p.is_file():
         return None
     try:
-        return SceneLayout.from_json(json.loads(p.read_text()))
-    except (OSError, json.JSONDecodeError, KeyError, ValueError) as e:
-        raise DataError(f"{p}: unreadable layout ({e})") from None
+        return SceneLayout.from_json(reading.read_json(p, what="layout"))
+    except DataError as e:
+        raise DataError(f"{shown(p, 400)}: unreadable layout ({reading.problem(e, p)})") from None
+    except (KeyError, ValueError, TypeError, AttributeError, IndexError) as e:
+        raise DataError(f"{shown(p, 400)}: unreadable layout ({type(e).__name__}: {shown(e)})") from None
 
 
 def shared_codebook(summaries: Sequence[DatasetSummary], *, seed: int = 0, k: int = 64, draw: int = 0) -> Codebook:

@@ -14,7 +14,6 @@ when no endpoint is configured or the endpoint fails.
 from __future__ import annotations
 
 import base64
-import json
 import logging
 import math
 import time
@@ -25,6 +24,7 @@ import numpy as np
 
 from ...config import LLMConfig
 from ...core.contracts import Room
+from ...core import reading
 from ...core.errors import ConfigError, DataError, LLMError, inert, shown
 from ...llm.cache import ResponseCache
 from ...llm.client import ChatClient, Usage
@@ -118,10 +118,7 @@ def load_scene_points(scene_dir: Path) -> tuple[np.ndarray, np.ndarray]:
         p = Path(scene_dir) / name
         if not p.is_file():
             raise DataError(f"{p}: missing (a scene folder needs coord.npy and color.npy)")
-        try:
-            a = np.load(p, allow_pickle=False)
-        except (ValueError, OSError, EOFError) as e:
-            raise DataError(f"{p}: not a readable .npy file ({e})") from None
+        a = reading.read_npy(p)
         if a.ndim != 2 or a.shape[1] < 3:
             raise DataError(f"{p}: expected an (N, 3) array, got shape {a.shape}")
         arrays.append(a[:, :3])
@@ -151,8 +148,8 @@ def _room_text(layout_json: Path) -> str:
     if not layout_json.is_file():
         return ""
     try:
-        room = Room.from_json(json.loads(layout_json.read_text(encoding="utf-8"))["room"])
-    except (OSError, ValueError, KeyError, TypeError) as e:
+        room = Room.from_json(reading.read_json(layout_json)["room"])
+    except (DataError, ValueError, KeyError, TypeError) as e:
         log.debug("%s: no room description (%s)", layout_json, e)
         return ""
     return f"It is a {describe_room(room)}."

@@ -23,6 +23,7 @@ from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
+from .. import reading
 from ..errors import ConfigError
 
 log = logging.getLogger(__name__)
@@ -205,10 +206,7 @@ def resolve_class_list(spec: str) -> ClassList:
     if not p.is_file():
         raise ConfigError(f"selection.real_classes: {spec!r} is neither a built-in list {BUILTIN_LISTS} "
                           f"nor an existing text file (one class per line)")
-    try:
-        classes = _parse_lines(p.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as e:
-        raise ConfigError(f"{p}: cannot read class list ({e})") from None
+    classes = _parse_lines(reading.read_text(p, error=ConfigError, what="class list"))
     if not classes:
         raise ConfigError(f"{p}: class list is empty (expected one class name per line)")
     return ClassList(p.stem, classes, {})

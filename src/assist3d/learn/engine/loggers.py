@@ -14,6 +14,9 @@ import logging
 from pathlib import Path
 from typing import Any, Mapping, Protocol, Sequence
 
+from ...core import reading
+from ...core.errors import DataError, shown
+
 log = logging.getLogger(__name__)
 
 Row = Mapping[str, Any]
@@ -46,9 +49,13 @@ class CsvLog:
         """Drop the rows of steps after ``step``."""
         if not self.path.is_file():
             return
-        lines = self.path.read_text().splitlines()
+        lines = reading.read_text(self.path, what="metrics log").splitlines()
         col = self.fields.index(self.step_key)
-        kept = lines[:1] + [ln for ln in lines[1:] if ln and int(ln.split(",")[col]) <= step]
+        try:
+            kept = lines[:1] + [ln for ln in lines[1:] if ln and int(ln.split(",")[col]) <= step]
+        except (ValueError, IndexError):
+            raise DataError(f"{shown(self.path, 400)}: a row has no integer {self.step_key!r} in column {col + 1}; "
+                            "repair or remove the log to resume") from None
         self.path.write_text("\n".join(kept) + "\n" if kept else "")
 
     def log(self, rows: Sequence[Row]) -> None:

@@ -43,7 +43,8 @@ import numpy as np
 import yaml
 
 from ...bench.data import open_dataset
-from ...core.errors import ConfigError, DataError, FaultError
+from ...core import reading
+from ...core.errors import ConfigError, DataError, FaultError, shown
 from ...core.interrupts import set_parent_death_signal
 from ...bench.evaluation.ap import METRIC_KEYS, SceneMatches, match_scene, summarize
 from ...bench.evaluation.predictions import save_predictions
@@ -238,9 +239,9 @@ def _check_request(out: Path, req: ProbeRequest) -> None:
     mine = req.as_dict()
     if path.is_file():
         try:
-            old = json.loads(path.read_text())
-        except (OSError, json.JSONDecodeError) as e:
-            raise DataError(f"{path}: unreadable ({e}); remove it or use another --out") from None
+            old = reading.read_json(path)
+        except DataError as e:
+            raise DataError(f"{e}; remove it or use another --out") from None
         stored = old.get("config") if isinstance(old, dict) else None
         missing = [(sec, key) for sec, key in BEFORE_ADDED
                    if isinstance(stored, dict) and isinstance(stored.get(sec), dict) and key not in stored[sec]]
@@ -292,7 +293,9 @@ def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", lo
         sdir = out / f"seed_{seed}"
         result_path = sdir / "result.json"
         if result_path.is_file():
-            run = json.loads(result_path.read_text())
+            run = reading.read_json(result_path)
+            if not isinstance(run, dict):
+                raise DataError(f"{shown(result_path, 400)}: expected a JSON object; remove it to run the seed again")
             runs.append(_with_hybrid(run, sdir, req, seed, emit) if hybrid else run)
             emit("seed_done", {"seed": seed, "cached": True, **runs[-1]})
             continue
