@@ -1,0 +1,246 @@
+"""A ray budget for one view: cast a coarse lattice of pixels, refine only where it is needed.
+
+``render.rays = "adaptive"``. The image is covered by square tiles whose corners are pixels on a
+lattice of stride ``render.ray_tile``. A tile whose four corner rays hit the *same triangle* is
+*flat*: a triangle is convex and the rays through a tile's pixels span the convex hull of its
+corner rays, so every pixel of the tile hits that triangle's plane inside that triangle. Its
+depths are then computed exactly by ray-plane intersection, with no ray cast. Every other tile
+(corners on different triangles, an edge, a miss) is split in four and its new corner pixels are
+cast, down to single pixels, which are all cast.
+
+The result is a full-resolution (t, face) pair for the view, equal to the full render's up to the
+rounding of the depth (float32) wherever nothing smaller than a tile stands in front of a flat
+tile's triangle without touching one of its corner rays. Everything downstream (depth sensor,
+per-voxel picks, colours, labels) is unchanged, so the same pixels pick the same points.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.contracts import Camera, SceneMesh
+from .raycast import RayCaster
+
+__all__ = ["FacePlanes", "face_planes", "lattice", "cast_adaptive"]
+
+#: the 12 edges of a box whose 8 corners are numbered 4 i + 2 j + k (i, j, k: max in x, y, z)
+_EDGES = np.array([(c, c | bit) for bit in (1, 2, 4) for c in range(8) if not c & bit])
+
+
+@dataclass(frozen=True)
+class FacePlanes:
+    """What the budget needs of a scene: the plane of every triangle, ``normal`` (F, 3) float64
+    (by winding, unnormalised) and ``offset`` (F,) float64 with ``normal . x = offset`` on it; and
+    ``bars`` (B, 8, 3) float64, the corners of an oriented box around every *slender* part of an
+    object (see :func:`slender_parts`): the parts a coarse lattice of rays can step over."""
+
+    normal: np.ndarray
+    offset: np.ndarray
+    bars: np.ndarray
+
+
+#: a connected part of an object whose middle extent is below this (m) is slender: a rod, a slat,
+#: a leg, a handle, a small thing (a chair's leg is ~4 cm, a crib's bar or a blind's slat 2-5 cm)
+SLENDER = 0.08
+
+
+def slender_parts(scene: SceneMesh, limit: float = SLENDER) -> np.ndarray:
+    """(B, 8, 3) float64 corners of the oriented (principal-axis) boxes of the connected parts of
+    the objects (faces with an instance id) whose second-largest extent is below ``limit`` metres."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    obj = np.flatnonzero(scene.face_instance >= 0)
+    if len(obj) == 0:
+        return np.zeros((0, 8, 3))
+    f = scene.faces[obj]
+    used, inv = np.unique(f, return_inverse=True)
+    f = inv.reshape(f.shape)
+    nv = len(used)
+    edges = coo_matrix((np.ones(2 * len(f)), (np.r_[f[:, 0], f[:, 1]], np.r_[f[:, 1], f[:, 2]])), shape=(nv, nv))
+    n, part = connected_components(edges, directed=False)
+    v = scene.vertices[used].astype(np.float64)
+    count = np.bincount(part, minlength=n).astype(np.float64)
+    mean = np.stack([np.bincount(part, v[:, j], minlength=n) for j in range(3)], axis=1) / count[:, None]
+    d = v - mean[part]
+    cov = np.zeros((n, 3, 3))
+    for i in range(3):
+        for j in range(i, 3):
+            cov[:, i, j] = cov[:, j, i] = np.bincount(part, d[:, i] * d[:, j], minlength=n)
+    _, axes = np.linalg.eigh(cov)  # (n, 3, 3): columns are the principal axes
+    local = np.einsum("vj,vjk->vk", d, axes[part])
+    lo = np.full((n, 3), np.inf)
+    hi = np.full((n, 3), -np.inf)
+    np.minimum.at(lo, part, local)
+    np.maximum.at(hi, part, local)
+    thin = np.sort(hi - lo, axis=1)[:, 1] < limit
+    pick = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    box = np.stack([lo[thin], hi[thin]], axis=1)  # (B, 2, 3) in the parts' own axes
+    corners_local = np.stack([box[:, pick[:, a], a] for a in range(3)], axis=-1)  # (B, 8, 3)
+    return mean[thin][:, None, :] + np.einsum("bck,bjk->bcj", corners_local, axes[thin])
+
+
+def face_planes(scene: SceneMesh) -> FacePlanes:
+    """Planes of all triangles of ``scene`` (float64, from its float32 vertices) and its slender parts."""
+    tri = scene.vertices[scene.faces].astype(np.float64)
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    return FacePlanes(n, np.einsum("ij,ij->i", n, tri[:, 0]), slender_parts(scene))
+
+
+def _occluders(planes: FacePlanes, camera: Camera, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """(r, c) float64: per cell of the lattice ``rows`` x ``cols``, the nearest camera depth of any
+    slender part's box whose image overlaps the cell (inf = none). Conservative: a box is clipped
+    at the camera plane, and its image is the rectangle around its projection, widened by a pixel."""
+    nr, nc = len(rows) - 1, len(cols) - 1
+    zgrid = np.full((nr, nc), np.inf)
+    if len(planes.bars) == 0:
+        return zgrid
+    rot, c = camera.pose[:3, :3], camera.pose[:3, 3]
+    pc = (planes.bars - c) @ rot  # (B, 8, 3) camera frame
+    eps = 1e-3
+    # clip each box at the plane z = eps: its image is that of its corners in front and of the
+    # points where its edges cross the plane
+    a, b = _EDGES[:, 0], _EDGES[:, 1]
+    za, zb = pc[:, a, 2], pc[:, b, 2]
+    cross = (za - eps) * (zb - eps) < 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = np.where(cross, (eps - za) / (zb - za), 0.0)
+    xing = pc[:, a] + w[..., None] * (pc[:, b] - pc[:, a])
+    pts = np.concatenate([pc, xing], axis=1)  # (B, 20, 3)
+    keep = np.concatenate([pc[..., 2] >= eps, cross], axis=1)
+    ahead = keep.any(axis=1)
+    pts, keep = pts[ahead], keep[ahead]
+    if len(pts) == 0:
+        return zgrid
+    z = np.where(keep, np.maximum(pts[..., 2], eps), 1.0)
+    u = camera.fx * pts[..., 0] / z + camera.cx
+    v = camera.fy * pts[..., 1] / z + camera.cy
+    inf = np.inf
+    u0 = np.floor(np.where(keep, u, inf).min(axis=1)) - 1
+    u1 = np.ceil(np.where(keep, u, -inf).max(axis=1)) + 1
+    v0 = np.floor(np.where(keep, v, inf).min(axis=1)) - 1
+    v1 = np.ceil(np.where(keep, v, -inf).max(axis=1)) + 1
+    zmin = np.where(keep, z, inf).min(axis=1)
+    # cells [rows[i], rows[i+1]] overlapping [v0, v1]: i in [i0, i1)
+    i0 = np.clip(np.searchsorted(rows, v0, side="right") - 1, 0, nr)
+    i1 = np.clip(np.searchsorted(rows, v1, side="left"), 0, nr)
+    j0 = np.clip(np.searchsorted(cols, u0, side="right") - 1, 0, nc)
+    j1 = np.clip(np.searchsorted(cols, u1, side="left"), 0, nc)
+    hi_i, hi_j = np.maximum(i1 - i0, 0), np.maximum(j1 - j0, 0)
+    size = hi_i * hi_j
+    if size.sum() == 0:
+        return zgrid
+    box = np.repeat(np.arange(len(size)), size)
+    k = np.arange(len(box)) - np.repeat(np.cumsum(size) - size, size)
+    ii = i0[box] + k // hi_j[box]
+    jj = j0[box] + k % hi_j[box]
+    np.minimum.at(zgrid, (ii, jj), zmin[box])
+    return zgrid
+
+
+def lattice(n: int, stride: int) -> np.ndarray:
+    """(k,) int64 lattice coordinates along an axis of ``n`` pixels: multiples of ``stride`` and
+    the last pixel. The lattice of ``stride / 2`` contains the lattice of ``stride``."""
+    pts = np.arange(0, n, stride, dtype=np.int64)
+    return pts if pts[-1] == n - 1 else np.append(pts, n - 1)
+
+
+def _tile_of(n: int, marks: np.ndarray) -> np.ndarray:
+    """(n,) int64 index of the tile between consecutive ``marks`` that each pixel lies in (a pixel
+    on a mark goes to the tile starting there; the last pixel to the last tile)."""
+    return np.clip(np.searchsorted(marks, np.arange(n), side="right") - 1, 0, max(len(marks) - 2, 0))
+
+
+def cast_adaptive(caster: RayCaster, planes: FacePlanes, camera: Camera, dirs: np.ndarray,
+                  tile: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """(t (H*W,) float32, face (H*W,) int32, rays cast) of one view, as ``caster.cast`` over all its
+    pixels would give (see the module docs for where it can differ).
+
+    dirs (H*W, 3) float32 world directions of the camera's pixels, row-major; tile a power of two
+    >= 1 (1 casts every pixel).
+    """
+    width, height = camera.width, camera.height
+    center = camera.pose[:3, 3].astype(np.float32)
+    n = width * height
+    t = np.full(n, np.inf, np.float32)
+    face = np.full(n, -1, np.int32)
+    done = np.zeros(n, bool)
+    cast = 0
+
+    def run(idx: np.ndarray) -> None:
+        nonlocal cast
+        idx = idx[~done[idx]]
+        if len(idx) == 0:
+            return
+        origins = np.empty((len(idx), 3), np.float32)
+        origins[:] = center
+        t[idx], face[idx] = caster.cast(origins, dirs[idx])
+        done[idx] = True
+        cast += len(idx)
+
+    face_img = face.reshape(height, width)
+    t_img = t.reshape(height, width)
+    s = max(1, int(tile))
+    rows, cols = lattice(height, s), lattice(width, s)
+    if len(rows) < 2 or len(cols) < 2 or s == 1:
+        run(np.arange(n))
+        return t, face, cast
+    occluded = _occluders(planes, camera, rows, cols)  # per first-level tile, inherited by its sub-tiles
+    cell_r, cell_c = np.arange(len(rows) - 1), np.arange(len(cols) - 1)
+    active = np.ones((len(rows) - 1, len(cols) - 1), bool)
+    offset = planes.offset - planes.normal @ center.astype(np.float64)  # per plane: n . (v0 - c)
+    while True:
+        # cast the corners of the tiles still open at this level
+        corner = np.zeros((len(rows), len(cols)), bool)
+        corner[:-1, :-1] |= active
+        corner[1:, :-1] |= active
+        corner[:-1, 1:] |= active
+        corner[1:, 1:] |= active
+        rr, cc = np.nonzero(corner)
+        run(rows[rr] * width + cols[cc])
+        if s == 1:
+            break
+        lat = face_img[np.ix_(rows, cols)]
+        f00 = lat[:-1, :-1]
+        flat = active & (f00 >= 0) & (f00 == lat[1:, :-1]) & (f00 == lat[:-1, 1:]) & (f00 == lat[1:, 1:])
+        ti, tj = np.nonzero(flat)
+        if len(ti):  # ... and no slender part may stand in front of the tile
+            tl = t_img[np.ix_(rows, cols)]
+            deepest = np.maximum(np.maximum(tl[ti, tj], tl[ti + 1, tj]), np.maximum(tl[ti, tj + 1], tl[ti + 1, tj + 1]))
+            ok = occluded[cell_r[ti], cell_c[tj]] >= deepest
+            flat[ti[~ok], tj[~ok]] = False
+            ti, tj = ti[ok], tj[ok]
+        if len(ti):
+            # the pixels of the flat tiles (a tile's last row and column are its neighbours' first;
+            # offsets past a short last tile are clipped onto its edge, where they repeat a pixel)
+            off = np.arange(s + 1)
+            r = np.minimum(rows[ti][:, None] + off, rows[ti + 1][:, None])  # (k, s + 1)
+            c = np.minimum(cols[tj][:, None] + off, cols[tj + 1][:, None])
+            idx = (r[:, :, None] * width + c[:, None, :]).reshape(-1)
+            f = np.repeat(f00[ti, tj], (s + 1) * (s + 1))
+            todo = ~done[idx]
+            idx, f = idx[todo], f[todo]
+            # in float64: the depths then round like the caster's, and few points change voxel
+            nrm = planes.normal[f]
+            d = dirs[idx]
+            den = d[:, 0] * nrm[:, 0]
+            den += d[:, 1] * nrm[:, 1]
+            den += d[:, 2] * nrm[:, 2]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                depth = (offset[f] / den).astype(np.float32)
+            good = np.isfinite(depth) & (depth > 0)  # a grazing plane: leave the pixel to be cast
+            idx = idx[good]
+            t[idx] = depth[good]
+            face[idx] = f[good]
+            done[idx] = True
+        s //= 2
+        rows2, cols2 = lattice(height, s), lattice(width, s)
+        pr = np.searchsorted(rows, rows2[:-1], side="right") - 1
+        pc = np.searchsorted(cols, cols2[:-1], side="right") - 1
+        active = (active & ~flat)[pr[:, None], pc[None, :]]
+        cell_r, cell_c = cell_r[pr], cell_c[pc]
+        rows, cols = rows2, cols2
+    run(np.flatnonzero(~done))  # nothing should be left; a safety net that keeps the view exact
+    return t, face, cast
