@@ -322,7 +322,14 @@ def boxes_collide(cx: np.ndarray, cy: np.ndarray, cyaw: np.ndarray, chw: float |
     n = len(cx)
     if n == 0 or len(boxes["x"]) == 0:
         return np.zeros(n, dtype=bool)
-    return (footprints_overlap(cx, cy, cyaw, chw, chd, boxes, margin) & z_overlap(cz0, cz1, boxes)).any(1)
+    zz = z_overlap(cz0, cz1, boxes)  # cheap: only the boxes some candidate meets in height need footprints
+    cols = np.flatnonzero(zz.any(0))
+    if len(cols) == 0:
+        return np.zeros(n, dtype=bool)
+    if len(cols) < len(boxes["x"]):
+        boxes = {k: v[cols] for k, v in boxes.items()}
+        zz = zz[:, cols]
+    return (footprints_overlap(cx, cy, cyaw, chw, chd, boxes, margin) & zz).any(1)
 
 
 def along_walls(walls, width: float, depth: float, step: float, gap: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

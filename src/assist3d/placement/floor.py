@@ -154,7 +154,7 @@ class FloorProblem:
         self.gx, self.gy = gx, gy
         self.yaws = np.arange(cfg.rotations) * (2 * np.pi / cfg.rotations)
         self.static_sat = self.grid.sat(self.grid.static)
-        self._cache: dict[int, tuple[Candidates, tuple[np.ndarray, ...]]] = {}
+        self._cache: dict[int | tuple, tuple[Candidates, tuple[np.ndarray, ...]]] = {}  # by item, by size
         self._sat: np.ndarray | None = None
         self.hmax = float(max(np.diff(self.grid.xb).max(), np.diff(self.grid.yb).max()))
         self._static_radius = self._free_radius(self.grid.static)
@@ -227,12 +227,16 @@ class FloorProblem:
         if hit is not None:
             return hit
         w, d, h = (float(v) for v in self.items[k].record.size)
-        parts = [] if self._hard_edge(k) else [self._grid_part(w, d, h, float(yaw)) for yaw in self.yaws]
-        parts.append(self._snapped_part(w, d, h))
-        c = Candidates.concat([p[0] for p in parts], (w, d, h))
-        ranges = tuple(np.concatenate([p[1][i] for p in parts]) for i in range(4))
-        self._cache[k] = (c, ranges)
-        return c, ranges
+        edge = self._hard_edge(k)
+        hit = self._cache.get((w, d, h, edge))  # items of one size (the same asset) share them
+        if hit is None:
+            parts = [] if edge else [self._grid_part(w, d, h, float(yaw)) for yaw in self.yaws]
+            parts.append(self._snapped_part(w, d, h))
+            c = Candidates.concat([p[0] for p in parts], (w, d, h))
+            ranges = tuple(np.concatenate([p[1][i] for p in parts]) for i in range(4))
+            hit = self._cache[(w, d, h, edge)] = (c, ranges)
+        self._cache[k] = hit
+        return hit
 
     def _hard_edge(self, k: int) -> bool:
         return any(r.kind == "edge" and r.hard for r in self.items[k].relations)
