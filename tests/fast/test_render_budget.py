@@ -86,10 +86,13 @@ def test_slender_parts_are_found_and_keep_their_pixels(scene):
     # the 12 bars (2 x 2 x 100 cm) are slender; the furniture boxes and the sphere are not
     assert len(bars) == 12
     assert np.allclose(np.sort(np.ptp(bars, axis=1), axis=1)[:, 2], 1.0, atol=1e-3)
+    of_face = face_planes(mesh).bar_of_face
+    assert set(np.unique(of_face[mesh.face_instance == 5])) == set(range(12))
+    assert np.all(of_face[mesh.face_instance != 5] == -1)
     # without them in the budget, a coarse lattice steps over the bars: the test above would fail
     caster = make_caster("embree", mesh.vertices, mesh.faces)
     planes = face_planes(mesh)
-    blind = type(planes)(planes.normal, planes.offset, np.zeros((0, 8, 3)))
+    blind = type(planes)(planes.normal, planes.offset, np.zeros((0, 8, 3)), None)
     cfg = RenderConfig(**SMALL)
     cams = _views(scene, cfg)
     c0 = cams[0]

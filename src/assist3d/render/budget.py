@@ -34,11 +34,13 @@ class FacePlanes:
     """What the budget needs of a scene: the plane of every triangle, ``normal`` (F, 3) float64
     (by winding, unnormalised) and ``offset`` (F,) float64 with ``normal . x = offset`` on it; and
     ``bars`` (B, 8, 3) float64, the corners of an oriented box around every *slender* part of an
-    object (see :func:`slender_parts`): the parts a coarse lattice of rays can step over."""
+    object (see :func:`slender_parts`): the parts a coarse lattice of rays can step over; and
+    ``bar_of_face`` (F,) int64, the slender part each triangle belongs to (-1 for none)."""
 
     normal: np.ndarray
     offset: np.ndarray
     bars: np.ndarray
+    bar_of_face: np.ndarray | None = None
 
 
 #: a connected part of an object whose middle extent is below this (m) is slender: a rod, a slat,
@@ -49,12 +51,18 @@ SLENDER = 0.08
 def slender_parts(scene: SceneMesh, limit: float = SLENDER) -> np.ndarray:
     """(B, 8, 3) float64 corners of the oriented (principal-axis) boxes of the connected parts of
     the objects (faces with an instance id) whose second-largest extent is below ``limit`` metres."""
+    return _slender(scene, limit)[0]
+
+
+def _slender(scene: SceneMesh, limit: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`slender_parts` and (F,) int64 the index of the slender part of each triangle (-1)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
+    of_face = np.full(len(scene.faces), -1, np.int64)
     obj = np.flatnonzero(scene.face_instance >= 0)
     if len(obj) == 0:
-        return np.zeros((0, 8, 3))
+        return np.zeros((0, 8, 3)), of_face
     f = scene.faces[obj]
     used, inv = np.unique(f, return_inverse=True)
     f = inv.reshape(f.shape)
@@ -76,27 +84,30 @@ def slender_parts(scene: SceneMesh, limit: float = SLENDER) -> np.ndarray:
     np.minimum.at(lo, part, local)
     np.maximum.at(hi, part, local)
     thin = np.sort(hi - lo, axis=1)[:, 1] < limit
+    number = np.full(n, -1, np.int64)
+    number[thin] = np.arange(int(thin.sum()))
+    of_face[obj] = number[part[f[:, 0]]]
     pick = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
     box = np.stack([lo[thin], hi[thin]], axis=1)  # (B, 2, 3) in the parts' own axes
     corners_local = np.stack([box[:, pick[:, a], a] for a in range(3)], axis=-1)  # (B, 8, 3)
-    return mean[thin][:, None, :] + np.einsum("bck,bjk->bcj", corners_local, axes[thin])
+    return mean[thin][:, None, :] + np.einsum("bck,bjk->bcj", corners_local, axes[thin]), of_face
 
 
 def face_planes(scene: SceneMesh) -> FacePlanes:
     """Planes of all triangles of ``scene`` (float64, from its float32 vertices) and its slender parts."""
     tri = scene.vertices[scene.faces].astype(np.float64)
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    return FacePlanes(n, np.einsum("ij,ij->i", n, tri[:, 0]), slender_parts(scene))
+    bars, of_face = _slender(scene, SLENDER)
+    return FacePlanes(n, np.einsum("ij,ij->i", n, tri[:, 0]), bars, of_face)
 
 
-def _occluders(planes: FacePlanes, camera: Camera, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-    """(r, c) float64: per cell of the lattice ``rows`` x ``cols``, the nearest camera depth of any
-    slender part's box whose image overlaps the cell (inf = none). Conservative: a box is clipped
-    at the camera plane, and its image is the rectangle around its projection, widened by a pixel."""
-    nr, nc = len(rows) - 1, len(cols) - 1
-    zgrid = np.full((nr, nc), np.inf)
+def _bar_images(planes: FacePlanes, camera: Camera) -> tuple[np.ndarray, ...]:
+    """The image of every slender part's box in front of the camera: ``(bar, v0, v1, u0, u1, z)``,
+    (k,) each: its index, the pixel rectangle around its projection widened by a pixel, and its
+    nearest camera depth. Conservative: a box is clipped at the camera plane first."""
+    empty = np.zeros(0)
     if len(planes.bars) == 0:
-        return zgrid
+        return np.zeros(0, np.int64), empty, empty, empty, empty, empty
     rot, c = camera.pose[:3, :3], camera.pose[:3, 3]
     pc = (planes.bars - c) @ rot  # (B, 8, 3) camera frame
     eps = 1e-3
@@ -110,10 +121,8 @@ def _occluders(planes: FacePlanes, camera: Camera, rows: np.ndarray, cols: np.nd
     xing = pc[:, a] + w[..., None] * (pc[:, b] - pc[:, a])
     pts = np.concatenate([pc, xing], axis=1)  # (B, 20, 3)
     keep = np.concatenate([pc[..., 2] >= eps, cross], axis=1)
-    ahead = keep.any(axis=1)
-    pts, keep = pts[ahead], keep[ahead]
-    if len(pts) == 0:
-        return zgrid
+    bar = np.flatnonzero(keep.any(axis=1))
+    pts, keep = pts[bar], keep[bar]
     z = np.where(keep, np.maximum(pts[..., 2], eps), 1.0)
     u = camera.fx * pts[..., 0] / z + camera.cx
     v = camera.fy * pts[..., 1] / z + camera.cy
@@ -123,21 +132,39 @@ def _occluders(planes: FacePlanes, camera: Camera, rows: np.ndarray, cols: np.nd
     v0 = np.floor(np.where(keep, v, inf).min(axis=1)) - 1
     v1 = np.ceil(np.where(keep, v, -inf).max(axis=1)) + 1
     zmin = np.where(keep, z, inf).min(axis=1)
-    # cells [rows[i], rows[i+1]] overlapping [v0, v1]: i in [i0, i1)
-    i0 = np.clip(np.searchsorted(rows, v0, side="right") - 1, 0, nr)
-    i1 = np.clip(np.searchsorted(rows, v1, side="left"), 0, nr)
-    j0 = np.clip(np.searchsorted(cols, u0, side="right") - 1, 0, nc)
-    j1 = np.clip(np.searchsorted(cols, u1, side="left"), 0, nc)
-    hi_i, hi_j = np.maximum(i1 - i0, 0), np.maximum(j1 - j0, 0)
-    size = hi_i * hi_j
-    if size.sum() == 0:
-        return zgrid
-    box = np.repeat(np.arange(len(size)), size)
-    k = np.arange(len(box)) - np.repeat(np.cumsum(size) - size, size)
-    ii = i0[box] + k // hi_j[box]
-    jj = j0[box] + k % hi_j[box]
-    np.minimum.at(zgrid, (ii, jj), zmin[box])
-    return zgrid
+    on = (u1 >= 0) & (u0 <= camera.width - 1) & (v1 >= 0) & (v0 <= camera.height - 1)
+    return bar[on], v0[on], v1[on], u0[on], u1[on], zmin[on]
+
+
+def _occluders(images: tuple[np.ndarray, ...], rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Per cell of the lattice ``rows`` x ``cols``, over the slender parts' images (from
+    :func:`_bar_images`) that overlap it: the nearest depth ``z1`` (r, c) float64 (inf = none),
+    the part at that depth ``id1`` (r, c) int64 (-2 = none), and the nearest depth of any other
+    part ``z2``."""
+    nr, nc = len(rows) - 1, len(cols) - 1
+    z1 = np.full(nr * nc, np.inf)
+    z2 = np.full(nr * nc, np.inf)
+    id1 = np.full(nr * nc, -2, np.int64)
+    bar, v0, v1, u0, u1, zmin = images
+    if len(bar):
+        # cells [rows[i], rows[i+1]] overlapping [v0, v1]: i in [i0, i1)
+        i0 = np.clip(np.searchsorted(rows, v0, side="right") - 1, 0, nr)
+        i1 = np.clip(np.searchsorted(rows, v1, side="left"), 0, nr)
+        j0 = np.clip(np.searchsorted(cols, u0, side="right") - 1, 0, nc)
+        j1 = np.clip(np.searchsorted(cols, u1, side="left"), 0, nc)
+        hi_i, hi_j = np.maximum(i1 - i0, 0), np.maximum(j1 - j0, 0)
+        size = hi_i * hi_j
+        if size.sum():
+            k = np.repeat(np.arange(len(size)), size)
+            m = np.arange(len(k)) - np.repeat(np.cumsum(size) - size, size)
+            cell = (i0[k] + m // hi_j[k]) * nc + j0[k] + m % hi_j[k]
+            z, who = zmin[k], bar[k]
+            np.minimum.at(z1, cell, z)
+            first = z == z1[cell]
+            id1[cell[first]] = who[first]
+            other = who != id1[cell]
+            np.minimum.at(z2, cell[other], z[other])
+    return z1.reshape(nr, nc), id1.reshape(nr, nc), z2.reshape(nr, nc)
 
 
 def lattice(n: int, stride: int) -> np.ndarray:
@@ -187,8 +214,8 @@ def cast_adaptive(caster: RayCaster, planes: FacePlanes, camera: Camera, dirs: n
     if len(rows) < 2 or len(cols) < 2 or s == 1:
         run(np.arange(n))
         return t, face, cast
-    occluded = _occluders(planes, camera, rows, cols)  # per first-level tile, inherited by its sub-tiles
-    cell_r, cell_c = np.arange(len(rows) - 1), np.arange(len(cols) - 1)
+    images = _bar_images(planes, camera)
+    bar_of_face = planes.bar_of_face if planes.bar_of_face is not None else np.full(len(planes.offset), -1)
     active = np.ones((len(rows) - 1, len(cols) - 1), bool)
     offset = planes.offset - planes.normal @ center.astype(np.float64)  # per plane: n . (v0 - c)
     while True:
@@ -209,7 +236,10 @@ def cast_adaptive(caster: RayCaster, planes: FacePlanes, camera: Camera, dirs: n
         if len(ti):  # ... and no slender part may stand in front of the tile
             tl = t_img[np.ix_(rows, cols)]
             deepest = np.maximum(np.maximum(tl[ti, tj], tl[ti + 1, tj]), np.maximum(tl[ti, tj + 1], tl[ti + 1, tj + 1]))
-            ok = occluded[cell_r[ti], cell_c[tj]] >= deepest
+            z1, id1, z2 = _occluders(images, rows, cols)
+            own = bar_of_face[f00[ti, tj]]  # a slender part cannot stand in front of itself
+            z1, id1, z2 = z1[ti, tj], id1[ti, tj], z2[ti, tj]
+            ok = np.where(id1 == own, z2, z1) >= deepest
             flat[ti[~ok], tj[~ok]] = False
             ti, tj = ti[ok], tj[ok]
         if len(ti):
@@ -240,7 +270,6 @@ def cast_adaptive(caster: RayCaster, planes: FacePlanes, camera: Camera, dirs: n
         pr = np.searchsorted(rows, rows2[:-1], side="right") - 1
         pc = np.searchsorted(cols, cols2[:-1], side="right") - 1
         active = (active & ~flat)[pr[:, None], pc[None, :]]
-        cell_r, cell_c = cell_r[pr], cell_c[pc]
         rows, cols = rows2, cols2
     run(np.flatnonzero(~done))  # nothing should be left; a safety net that keeps the view exact
     return t, face, cast
