@@ -36,8 +36,8 @@ def _sums(sat: np.ndarray, i0: np.ndarray, i1: np.ndarray, j0: np.ndarray, j1: n
     by every row range (j) with every column range (i); out-of-grid indices are clipped."""
     nyp, nxp = sat.shape
     i0, i1 = np.maximum(i0, 0), np.minimum(i1, nxp - 1)
-    j0, j1 = np.maximum(j0, 0)[:, None], np.minimum(j1, nyp - 1)[:, None]
-    return sat[j1, i1] - sat[j0, i1] - sat[j1, i0] + sat[j0, i0]
+    hi, lo = sat[np.minimum(j1, nyp - 1)], sat[np.maximum(j0, 0)]  # rows first, then columns: two 1-d gathers
+    return hi[:, i1] - lo[:, i1] - hi[:, i0] + lo[:, i0]
 
 
 def _rect_sums(sat: np.ndarray, i0: np.ndarray, i1: np.ndarray, j0: np.ndarray, j1: np.ndarray) -> np.ndarray:
