@@ -93,8 +93,9 @@ class FloorGrid:
         # Distance of every cell centre to the nearest wall (for edge/middle scores and priors).
         mx = (gx0 + gx1) / 2
         my = (gy0 + gy1) / 2
-        dist = shapely.distance(self.poly.exterior, shapely.points(mx.ravel(), my.ravel())).reshape(mx.shape)
-        self.wall_dist = np.where(inside, dist, 0.0)
+        dist = np.zeros(mx.shape)  # only the cells inside are asked for (the others read 0)
+        dist[inside] = shapely.distance(self.poly.exterior, shapely.points(mx[inside], my[inside]))
+        self.wall_dist = dist
         self.outside_sat = self.sat(self.outside)
 
     def ranges(self, cx: np.ndarray, cy: np.ndarray, ex: np.ndarray, ey: np.ndarray):

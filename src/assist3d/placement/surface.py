@@ -91,17 +91,20 @@ class SurfaceMap:
             c, s = abs(np.cos(yaw)), abs(np.sin(yaw))
             ex = int(np.ceil((c * width / 2 + s * depth / 2 + r) / self.step - 1e-9))
             ey = int(np.ceil((s * width / 2 + c * depth / 2 + r) / self.step - 1e-9))
-            valid = self._memoised(("valid", clear, ex, ey), lambda: footprint_mask(ex, ey))
-            jj, ii = np.nonzero(valid)
-            if len(jj) > max_count:
-                stride = int(np.ceil(np.sqrt(len(jj) / max_count)))
-                keep = (jj % stride == 0) & (ii % stride == 0)
-                if keep.sum() == 0:
-                    keep[len(jj) // 2] = True
-                jj, ii = jj[keep], ii[keep]
-            out[0].append(self.x0 + ii * self.step)
-            out[1].append(self.y0 + jj * self.step)
-            out[2].append(np.full(len(jj), float(yaw)))
+            def cells(ex: int = ex, ey: int = ey) -> tuple[np.ndarray, np.ndarray]:
+                jj, ii = np.nonzero(footprint_mask(ex, ey))
+                if len(jj) > max_count:
+                    stride = int(np.ceil(np.sqrt(len(jj) / max_count)))
+                    keep = (jj % stride == 0) & (ii % stride == 0)
+                    if keep.sum() == 0:
+                        keep[len(jj) // 2] = True
+                    jj, ii = jj[keep], ii[keep]
+                return self.x0 + ii * self.step, self.y0 + jj * self.step
+
+            xs, ys = self._memoised(("cells", clear, ex, ey, max_count), cells)
+            out[0].append(xs)
+            out[1].append(ys)
+            out[2].append(np.full(len(xs), float(yaw)))
         return np.concatenate(out[0]), np.concatenate(out[1]), np.concatenate(out[2])
 
 
