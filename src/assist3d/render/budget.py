@@ -248,22 +248,22 @@ def cast_adaptive(caster: RayCaster, planes: FacePlanes, camera: Camera, dirs: n
             off = np.arange(s + 1)
             r = np.minimum(rows[ti][:, None] + off, rows[ti + 1][:, None])  # (k, s + 1)
             c = np.minimum(cols[tj][:, None] + off, cols[tj + 1][:, None])
-            idx = (r[:, :, None] * width + c[:, None, :]).reshape(-1)
-            f = np.repeat(f00[ti, tj], (s + 1) * (s + 1))
-            todo = ~done[idx]
-            idx, f = idx[todo], f[todo]
-            # in float64: the depths then round like the caster's, and few points change voxel
-            nrm = planes.normal[f]
-            d = dirs[idx]
-            den = d[:, 0] * nrm[:, 0]
-            den += d[:, 1] * nrm[:, 1]
-            den += d[:, 2] * nrm[:, 2]
+            blk = (r[:, :, None] * width + c[:, None, :]).reshape(len(ti), -1)  # (k, (s + 1)^2)
+            ft = f00[ti, tj]
+            # per pixel n . d with the tile's normal, in float64: the depths then round like the
+            # caster's, and few points change voxel
+            nrm = planes.normal[ft][:, None, :]
+            d = dirs[blk]  # (k, P, 3)
+            den = d[..., 0] * nrm[..., 0]
+            den += d[..., 1] * nrm[..., 1]
+            den += d[..., 2] * nrm[..., 2]
             with np.errstate(divide="ignore", invalid="ignore"):
-                depth = (offset[f] / den).astype(np.float32)
-            good = np.isfinite(depth) & (depth > 0)  # a grazing plane: leave the pixel to be cast
-            idx = idx[good]
+                depth = (offset[ft][:, None] / den).astype(np.float32)
+            # a grazing plane is left to be cast; a pixel already known keeps its value
+            good = ~done[blk] & np.isfinite(depth) & (depth > 0)
+            idx = blk[good]
             t[idx] = depth[good]
-            face[idx] = f[good]
+            face[idx] = np.broadcast_to(ft[:, None], blk.shape)[good]
             done[idx] = True
         s //= 2
         rows2, cols2 = lattice(height, s), lattice(width, s)
