@@ -178,6 +178,14 @@ class RenderConfig(Section):
     cx: float | None = Field(None, description="Principal point x, px; None = (width - 1) / 2.")
     cy: float | None = Field(None, description="Principal point y, px; None = (height - 1) / 2.")
     threads: int = Field(2, ge=1, le=256, description="Ray-casting threads, at most 256.")
+    rays: Literal["full", "adaptive"] = Field(
+        "full", description="Which rays a view casts: 'full' = one per pixel (the reference); 'adaptive' = a "
+                            "lattice of every ray_tile-th pixel, refined only where a tile's corner rays hit "
+                            "different triangles (edges, misses); the other pixels' depths come from their "
+                            "triangle's plane, so the view's pixels, and the points, labels and colours fused "
+                            "from them, are those of the full render (docs/generation.md, 'Ray budget').")
+    ray_tile: int = Field(8, ge=1, le=64, description="rays='adaptive': lattice stride of the first pass, px, a "
+                                                      "power of two at most 64 (1 = every pixel).")
     voxel_size: float = Field(0.02, ge=0.001, le=1, description="Voxel downsampling size, m, 0.001..1 (paper: voxel "
                                                                 "downsampling; "
                                                       "ScanNet-like 2 cm).")
@@ -215,6 +223,13 @@ class RenderConfig(Section):
                                                              "than this are dropped, m^2 (ScanNet drops pieces under "
                                                              "7,500 faces of its 1 cm mesh, ~0.4 m^2 of flat "
                                                              "surface; 0 = keep all).")
+
+    @field_validator("ray_tile")
+    @classmethod
+    def _tile_power_of_two(cls, v: int) -> int:
+        if v & (v - 1):
+            raise ValueError(f"ray_tile must be a power of two (1, 2, 4, ... 64), not {v}")
+        return v
 
     @model_validator(mode="after")
     def _tsdf_band_holds_a_voxel(self) -> "RenderConfig":

@@ -75,8 +75,13 @@ def obb_overlap(ax: np.ndarray, ay: np.ndarray, ayaw: np.ndarray, ahw: np.ndarra
     ``*hw``/``*hd`` are half width (local x) and half depth (local y). Rectangles closer than
     ``margin`` count as overlapping; touching rectangles (gap 0, margin 0) do not.
     """
-    dx, dy = bx - ax, by - ay
-    ca, sa, cb, sb = np.cos(ayaw), np.sin(ayaw), np.cos(byaw), np.sin(byaw)
+    return _obb_overlap_cs(bx - ax, by - ay, np.cos(ayaw), np.sin(ayaw), ahw, ahd, np.cos(byaw), np.sin(byaw),
+                           bhw, bhd, margin)
+
+
+def _obb_overlap_cs(dx, dy, ca, sa, ahw, ahd, cb, sb, bhw, bhd, margin: float) -> np.ndarray:
+    """:func:`obb_overlap` from the centre offsets and the cosines and sines of the yaws (callers
+    that test many pairs of few rectangles take those once per rectangle)."""
     axes = ((ca, sa), (-sa, ca), (cb, sb), (-sb, cb))
     sep = np.zeros(np.broadcast(dx, dy, ahw, bhw).shape, dtype=bool)
     for ux, uy in axes:
@@ -294,9 +299,11 @@ def footprints_overlap(cx: np.ndarray, cy: np.ndarray, cyaw: np.ndarray, chw: fl
             & (np.abs(boxes["y"][None] - cy[:, None]) < hy[:, None] + boxes["hy"][None] + margin))
     rows, cols = np.nonzero(near)
     if len(rows):
-        out[rows, cols] = obb_overlap(cx[rows], cy[rows], cyaw[rows], chw[rows], chd[rows], boxes["x"][cols],
-                                      boxes["y"][cols], boxes["yaw"][cols], boxes["hw"][cols], boxes["hd"][cols],
-                                      margin)
+        ca, sa = np.cos(cyaw), np.sin(cyaw)  # per rectangle, not per pair (the same values)
+        cb, sb = np.cos(boxes["yaw"]), np.sin(boxes["yaw"])
+        out[rows, cols] = _obb_overlap_cs(boxes["x"][cols] - cx[rows], boxes["y"][cols] - cy[rows], ca[rows],
+                                          sa[rows], chw[rows], chd[rows], cb[cols], sb[cols], boxes["hw"][cols],
+                                          boxes["hd"][cols], margin)
     return out
 
 
@@ -322,7 +329,14 @@ def boxes_collide(cx: np.ndarray, cy: np.ndarray, cyaw: np.ndarray, chw: float |
     n = len(cx)
     if n == 0 or len(boxes["x"]) == 0:
         return np.zeros(n, dtype=bool)
-    return (footprints_overlap(cx, cy, cyaw, chw, chd, boxes, margin) & z_overlap(cz0, cz1, boxes)).any(1)
+    zz = z_overlap(cz0, cz1, boxes)  # cheap: only the boxes some candidate meets in height need footprints
+    cols = np.flatnonzero(zz.any(0))
+    if len(cols) == 0:
+        return np.zeros(n, dtype=bool)
+    if len(cols) < len(boxes["x"]):
+        boxes = {k: v[cols] for k, v in boxes.items()}
+        zz = zz[:, cols]
+    return (footprints_overlap(cx, cy, cyaw, chw, chd, boxes, margin) & zz).any(1)
 
 
 def along_walls(walls, width: float, depth: float, step: float, gap: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

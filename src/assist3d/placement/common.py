@@ -128,18 +128,19 @@ def order_candidates(c: Candidates, rank: np.ndarray, score: np.ndarray, rng: np
     out: list[int] = [int(order[0])]
     if max_branch > 1 and n > 1:
         xs, ys, yaws = c.x[order], c.y[order], c.yaw[order]
-        keep = np.ones(n, dtype=bool)
-        keep[0] = False
+        alive = np.arange(1, n)  # ranks still free to choose, best first
         for _ in range(max_branch - 1):
             j = out[-1]
-            same_yaw = np.abs(np.angle(np.exp(1j * (yaws - c.yaw[j])))) < 1e-3
-            close = (np.hypot(xs - c.x[j], ys - c.y[j]) < spread) & same_yaw
-            keep &= ~close
-            nxt = np.flatnonzero(keep)
-            if len(nxt) == 0:
+            near = np.flatnonzero(np.hypot(xs[alive] - c.x[j], ys[alive] - c.y[j]) < spread)
+            same_yaw = np.abs(np.angle(np.exp(1j * (yaws[alive[near]] - c.yaw[j])))) < 1e-3
+            if same_yaw.any():
+                drop = np.ones(len(alive), dtype=bool)
+                drop[near[same_yaw]] = False
+                alive = alive[drop]
+            if len(alive) == 0:
                 break
-            out.append(int(order[nxt[0]]))
-            keep[nxt[0]] = False
+            out.append(int(order[alive[0]]))
+            alive = alive[1:]
     return [Choice(float(c.x[i]), float(c.y[i]), float(c.yaw[i]), float(c.z[i]), float(score[i])) for i in out]
 
 

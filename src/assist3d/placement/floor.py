@@ -36,8 +36,8 @@ def _sums(sat: np.ndarray, i0: np.ndarray, i1: np.ndarray, j0: np.ndarray, j1: n
     by every row range (j) with every column range (i); out-of-grid indices are clipped."""
     nyp, nxp = sat.shape
     i0, i1 = np.maximum(i0, 0), np.minimum(i1, nxp - 1)
-    j0, j1 = np.maximum(j0, 0)[:, None], np.minimum(j1, nyp - 1)[:, None]
-    return sat[j1, i1] - sat[j0, i1] - sat[j1, i0] + sat[j0, i0]
+    hi, lo = sat[np.minimum(j1, nyp - 1)], sat[np.maximum(j0, 0)]  # rows first, then columns: two 1-d gathers
+    return hi[:, i1] - lo[:, i1] - hi[:, i0] + lo[:, i0]
 
 
 def _rect_sums(sat: np.ndarray, i0: np.ndarray, i1: np.ndarray, j0: np.ndarray, j1: np.ndarray) -> np.ndarray:
@@ -93,8 +93,9 @@ class FloorGrid:
         # Distance of every cell centre to the nearest wall (for edge/middle scores and priors).
         mx = (gx0 + gx1) / 2
         my = (gy0 + gy1) / 2
-        dist = shapely.distance(self.poly.exterior, shapely.points(mx.ravel(), my.ravel())).reshape(mx.shape)
-        self.wall_dist = np.where(inside, dist, 0.0)
+        dist = np.zeros(mx.shape)  # only the cells inside are asked for (the others read 0)
+        dist[inside] = shapely.distance(self.poly.exterior, shapely.points(mx[inside], my[inside]))
+        self.wall_dist = dist
         self.outside_sat = self.sat(self.outside)
 
     def ranges(self, cx: np.ndarray, cy: np.ndarray, ex: np.ndarray, ey: np.ndarray):
@@ -154,7 +155,7 @@ class FloorProblem:
         self.gx, self.gy = gx, gy
         self.yaws = np.arange(cfg.rotations) * (2 * np.pi / cfg.rotations)
         self.static_sat = self.grid.sat(self.grid.static)
-        self._cache: dict[int, tuple[Candidates, tuple[np.ndarray, ...]]] = {}
+        self._cache: dict[int | tuple, tuple[Candidates, tuple[np.ndarray, ...]]] = {}  # by item, by size
         self._sat: np.ndarray | None = None
         self.hmax = float(max(np.diff(self.grid.xb).max(), np.diff(self.grid.yb).max()))
         self._static_radius = self._free_radius(self.grid.static)
@@ -227,12 +228,16 @@ class FloorProblem:
         if hit is not None:
             return hit
         w, d, h = (float(v) for v in self.items[k].record.size)
-        parts = [] if self._hard_edge(k) else [self._grid_part(w, d, h, float(yaw)) for yaw in self.yaws]
-        parts.append(self._snapped_part(w, d, h))
-        c = Candidates.concat([p[0] for p in parts], (w, d, h))
-        ranges = tuple(np.concatenate([p[1][i] for p in parts]) for i in range(4))
-        self._cache[k] = (c, ranges)
-        return c, ranges
+        edge = self._hard_edge(k)
+        hit = self._cache.get((w, d, h, edge))  # items of one size (the same asset) share them
+        if hit is None:
+            parts = [] if edge else [self._grid_part(w, d, h, float(yaw)) for yaw in self.yaws]
+            parts.append(self._snapped_part(w, d, h))
+            c = Candidates.concat([p[0] for p in parts], (w, d, h))
+            ranges = tuple(np.concatenate([p[1][i] for p in parts]) for i in range(4))
+            hit = self._cache[(w, d, h, edge)] = (c, ranges)
+        self._cache[k] = hit
+        return hit
 
     def _hard_edge(self, k: int) -> bool:
         return any(r.kind == "edge" and r.hard for r in self.items[k].relations)

@@ -106,6 +106,8 @@ def render_point_cloud(scene: SceneMesh, room: Room, cfg: RenderConfig, *, rng: 
     stats = {"views": len(cameras), "vantage_points": len(centers), "rays": len(cameras) * cfg.width * cfg.height,
              "raw_hits": hits.raw_hits, "rendered_points": rendered_points, "points": len(sample),
              "point_source": cfg.point_source, "labels": cfg.labels, "backend": cfg.backend, **extra}
+    if cfg.rays != "full":  # the full render's record stays as it was
+        stats.update(ray_budget=cfg.rays, ray_tile=cfg.ray_tile, rays_cast=hits.rays_cast)
     log.debug("render %s: %s", scene_id, stats)
     return RenderResult(sample, centers, hits.pixel_counts, timings, stats)
 

@@ -21,6 +21,7 @@ from threadpoolctl import threadpool_limits
 
 from ..config import RenderConfig
 from ..core.contracts import Camera, SceneMesh
+from .budget import cast_adaptive, face_planes
 from .camera import pixel_directions, rotate_directions
 from .raycast import RayCaster
 from .sensor import apply_depth_sensor, sensor_enabled
@@ -61,6 +62,7 @@ class FusedHits:
     raw_hits: int
     seconds_cast: float
     seconds_merge: float
+    rays_cast: int = 0
 
 
 def scene_grid(scene: SceneMesh, voxel_size: float) -> VoxelGrid:
@@ -101,15 +103,20 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
     salts = rng.integers(1, 2**62, size=len(cameras) + 1)
     sensor_seeds = rng.integers(0, 2**63, size=len(cameras))
     realism = sensor_enabled(cfg)
+    planes = face_planes(scene) if cfg.rays == "adaptive" else None
 
-    def one_view(i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, Any]:
+    def one_view(i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, Any, int]:
         cam = cameras[i]
         dirs = rotate_directions(cam_dirs, cam.pose)
         center = cam.pose[:3, 3].astype(np.float32)
-        origins = np.zeros_like(dirs)
-        for j in range(3):
-            origins[:, j] = center[j]
-        t, face = caster.cast(origins, dirs)
+        if planes is not None:
+            t, face, n_cast = cast_adaptive(caster, planes, cam, dirs, cfg.ray_tile)
+        else:
+            origins = np.zeros_like(dirs)
+            for j in range(3):
+                origins[:, j] = center[j]
+            t, face = caster.cast(origins, dirs)
+            n_cast = len(t)
         if realism:
             t, face = apply_depth_sensor(scene, t, face, dirs, cam.width, cam.height, cfg,
                                          rng=np.random.default_rng(int(sensor_seeds[i])))
@@ -126,14 +133,14 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
             pts[:, j] = col
         keys = grid.keys(pts)
         keep = pick_one_per_voxel_scan(keys, int(salts[i]))
-        return keys[keep], pts[keep], fh[keep], counts, len(pix), extra
+        return keys[keep], pts[keep], fh[keep], counts, len(pix), extra, n_cast
 
     def run(pool: ThreadPoolExecutor | None) -> list[tuple]:
         out = []
         for i, part in enumerate(_ordered_map(pool, one_view, len(cameras), 2 * cfg.threads)):
             if sink is not None:
                 sink.add(i, part[5])
-            out.append(part[:5])
+            out.append(part[:5] + part[6:])
         return out
 
     t0 = time.perf_counter()
@@ -150,9 +157,10 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
     view = np.repeat(np.arange(len(parts), dtype=np.int32), [len(p[0]) for p in parts])
     counts = np.sum([p[3] for p in parts], axis=0)
     raw = int(sum(p[4] for p in parts))
+    rays_cast = int(sum(p[5] for p in parts))
     del parts
     keep = pick_one_per_voxel(keys, int(salts[-1]))
     out = FusedHits(coord[keep], face[keep], view[keep], counts[1:],
-                    raw, t1 - t0, time.perf_counter() - t1)
+                    raw, t1 - t0, time.perf_counter() - t1, rays_cast)
     log.debug("fusion: %d raw hits -> %d per-view picks -> %d points", raw, len(keys), len(keep))
     return out

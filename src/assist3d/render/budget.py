@@ -1,0 +1,275 @@
+"""A ray budget for one view: cast a coarse lattice of pixels, refine only where it is needed.
+
+``render.rays = "adaptive"``. The image is covered by square tiles whose corners are pixels on a
+lattice of stride ``render.ray_tile``. A tile whose four corner rays hit the *same triangle* is
+*flat*: a triangle is convex and the rays through a tile's pixels span the convex hull of its
+corner rays, so every pixel of the tile hits that triangle's plane inside that triangle. Its
+depths are then computed exactly by ray-plane intersection, with no ray cast. Every other tile
+(corners on different triangles, an edge, a miss) is split in four and its new corner pixels are
+cast, down to single pixels, which are all cast.
+
+The result is a full-resolution (t, face) pair for the view, equal to the full render's up to the
+rounding of the depth (float32) wherever nothing smaller than a tile stands in front of a flat
+tile's triangle without touching one of its corner rays. Everything downstream (depth sensor,
+per-voxel picks, colours, labels) is unchanged, so the same pixels pick the same points.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.contracts import Camera, SceneMesh
+from .raycast import RayCaster
+
+__all__ = ["FacePlanes", "face_planes", "lattice", "cast_adaptive"]
+
+#: the 12 edges of a box whose 8 corners are numbered 4 i + 2 j + k (i, j, k: max in x, y, z)
+_EDGES = np.array([(c, c | bit) for bit in (1, 2, 4) for c in range(8) if not c & bit])
+
+
+@dataclass(frozen=True)
+class FacePlanes:
+    """What the budget needs of a scene: the plane of every triangle, ``normal`` (F, 3) float64
+    (by winding, unnormalised) and ``offset`` (F,) float64 with ``normal . x = offset`` on it; and
+    ``bars`` (B, 8, 3) float64, the corners of an oriented box around every *slender* part of an
+    object (see :func:`slender_parts`): the parts a coarse lattice of rays can step over; and
+    ``bar_of_face`` (F,) int64, the slender part each triangle belongs to (-1 for none)."""
+
+    normal: np.ndarray
+    offset: np.ndarray
+    bars: np.ndarray
+    bar_of_face: np.ndarray | None = None
+
+
+#: a connected part of an object whose middle extent is below this (m) is slender: a rod, a slat,
+#: a leg, a handle, a small thing (a chair's leg is ~4 cm, a crib's bar or a blind's slat 2-5 cm)
+SLENDER = 0.08
+
+
+def slender_parts(scene: SceneMesh, limit: float = SLENDER) -> np.ndarray:
+    """(B, 8, 3) float64 corners of the oriented (principal-axis) boxes of the connected parts of
+    the objects (faces with an instance id) whose second-largest extent is below ``limit`` metres."""
+    return _slender(scene, limit)[0]
+
+
+def _slender(scene: SceneMesh, limit: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`slender_parts` and (F,) int64 the index of the slender part of each triangle (-1)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    of_face = np.full(len(scene.faces), -1, np.int64)
+    obj = np.flatnonzero(scene.face_instance >= 0)
+    if len(obj) == 0:
+        return np.zeros((0, 8, 3)), of_face
+    f = scene.faces[obj]
+    used, inv = np.unique(f, return_inverse=True)
+    f = inv.reshape(f.shape)
+    nv = len(used)
+    edges = coo_matrix((np.ones(2 * len(f)), (np.r_[f[:, 0], f[:, 1]], np.r_[f[:, 1], f[:, 2]])), shape=(nv, nv))
+    n, part = connected_components(edges, directed=False)
+    v = scene.vertices[used].astype(np.float64)
+    count = np.bincount(part, minlength=n).astype(np.float64)
+    mean = np.stack([np.bincount(part, v[:, j], minlength=n) for j in range(3)], axis=1) / count[:, None]
+    d = v - mean[part]
+    cov = np.zeros((n, 3, 3))
+    for i in range(3):
+        for j in range(i, 3):
+            cov[:, i, j] = cov[:, j, i] = np.bincount(part, d[:, i] * d[:, j], minlength=n)
+    _, axes = np.linalg.eigh(cov)  # (n, 3, 3): columns are the principal axes
+    local = np.einsum("vj,vjk->vk", d, axes[part])
+    lo = np.full((n, 3), np.inf)
+    hi = np.full((n, 3), -np.inf)
+    np.minimum.at(lo, part, local)
+    np.maximum.at(hi, part, local)
+    thin = np.sort(hi - lo, axis=1)[:, 1] < limit
+    number = np.full(n, -1, np.int64)
+    number[thin] = np.arange(int(thin.sum()))
+    of_face[obj] = number[part[f[:, 0]]]
+    pick = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    box = np.stack([lo[thin], hi[thin]], axis=1)  # (B, 2, 3) in the parts' own axes
+    corners_local = np.stack([box[:, pick[:, a], a] for a in range(3)], axis=-1)  # (B, 8, 3)
+    return mean[thin][:, None, :] + np.einsum("bck,bjk->bcj", corners_local, axes[thin]), of_face
+
+
+def face_planes(scene: SceneMesh) -> FacePlanes:
+    """Planes of all triangles of ``scene`` (float64, from its float32 vertices) and its slender parts."""
+    tri = scene.vertices[scene.faces].astype(np.float64)
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    bars, of_face = _slender(scene, SLENDER)
+    return FacePlanes(n, np.einsum("ij,ij->i", n, tri[:, 0]), bars, of_face)
+
+
+def _bar_images(planes: FacePlanes, camera: Camera) -> tuple[np.ndarray, ...]:
+    """The image of every slender part's box in front of the camera: ``(bar, v0, v1, u0, u1, z)``,
+    (k,) each: its index, the pixel rectangle around its projection widened by a pixel, and its
+    nearest camera depth. Conservative: a box is clipped at the camera plane first."""
+    empty = np.zeros(0)
+    if len(planes.bars) == 0:
+        return np.zeros(0, np.int64), empty, empty, empty, empty, empty
+    rot, c = camera.pose[:3, :3], camera.pose[:3, 3]
+    pc = (planes.bars - c) @ rot  # (B, 8, 3) camera frame
+    eps = 1e-3
+    # clip each box at the plane z = eps: its image is that of its corners in front and of the
+    # points where its edges cross the plane
+    a, b = _EDGES[:, 0], _EDGES[:, 1]
+    za, zb = pc[:, a, 2], pc[:, b, 2]
+    cross = (za - eps) * (zb - eps) < 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = np.where(cross, (eps - za) / (zb - za), 0.0)
+    xing = pc[:, a] + w[..., None] * (pc[:, b] - pc[:, a])
+    pts = np.concatenate([pc, xing], axis=1)  # (B, 20, 3)
+    keep = np.concatenate([pc[..., 2] >= eps, cross], axis=1)
+    bar = np.flatnonzero(keep.any(axis=1))
+    pts, keep = pts[bar], keep[bar]
+    z = np.where(keep, np.maximum(pts[..., 2], eps), 1.0)
+    u = camera.fx * pts[..., 0] / z + camera.cx
+    v = camera.fy * pts[..., 1] / z + camera.cy
+    inf = np.inf
+    u0 = np.floor(np.where(keep, u, inf).min(axis=1)) - 1
+    u1 = np.ceil(np.where(keep, u, -inf).max(axis=1)) + 1
+    v0 = np.floor(np.where(keep, v, inf).min(axis=1)) - 1
+    v1 = np.ceil(np.where(keep, v, -inf).max(axis=1)) + 1
+    zmin = np.where(keep, z, inf).min(axis=1)
+    on = (u1 >= 0) & (u0 <= camera.width - 1) & (v1 >= 0) & (v0 <= camera.height - 1)
+    return bar[on], v0[on], v1[on], u0[on], u1[on], zmin[on]
+
+
+def _occluders(images: tuple[np.ndarray, ...], rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Per cell of the lattice ``rows`` x ``cols``, over the slender parts' images (from
+    :func:`_bar_images`) that overlap it: the nearest depth ``z1`` (r, c) float64 (inf = none),
+    the part at that depth ``id1`` (r, c) int64 (-2 = none), and the nearest depth of any other
+    part ``z2``."""
+    nr, nc = len(rows) - 1, len(cols) - 1
+    z1 = np.full(nr * nc, np.inf)
+    z2 = np.full(nr * nc, np.inf)
+    id1 = np.full(nr * nc, -2, np.int64)
+    bar, v0, v1, u0, u1, zmin = images
+    if len(bar):
+        # cells [rows[i], rows[i+1]] overlapping [v0, v1]: i in [i0, i1)
+        i0 = np.clip(np.searchsorted(rows, v0, side="right") - 1, 0, nr)
+        i1 = np.clip(np.searchsorted(rows, v1, side="left"), 0, nr)
+        j0 = np.clip(np.searchsorted(cols, u0, side="right") - 1, 0, nc)
+        j1 = np.clip(np.searchsorted(cols, u1, side="left"), 0, nc)
+        hi_i, hi_j = np.maximum(i1 - i0, 0), np.maximum(j1 - j0, 0)
+        size = hi_i * hi_j
+        if size.sum():
+            k = np.repeat(np.arange(len(size)), size)
+            m = np.arange(len(k)) - np.repeat(np.cumsum(size) - size, size)
+            cell = (i0[k] + m // hi_j[k]) * nc + j0[k] + m % hi_j[k]
+            z, who = zmin[k], bar[k]
+            np.minimum.at(z1, cell, z)
+            first = z == z1[cell]
+            id1[cell[first]] = who[first]
+            other = who != id1[cell]
+            np.minimum.at(z2, cell[other], z[other])
+    return z1.reshape(nr, nc), id1.reshape(nr, nc), z2.reshape(nr, nc)
+
+
+def lattice(n: int, stride: int) -> np.ndarray:
+    """(k,) int64 lattice coordinates along an axis of ``n`` pixels: multiples of ``stride`` and
+    the last pixel. The lattice of ``stride / 2`` contains the lattice of ``stride``."""
+    pts = np.arange(0, n, stride, dtype=np.int64)
+    return pts if pts[-1] == n - 1 else np.append(pts, n - 1)
+
+
+def _tile_of(n: int, marks: np.ndarray) -> np.ndarray:
+    """(n,) int64 index of the tile between consecutive ``marks`` that each pixel lies in (a pixel
+    on a mark goes to the tile starting there; the last pixel to the last tile)."""
+    return np.clip(np.searchsorted(marks, np.arange(n), side="right") - 1, 0, max(len(marks) - 2, 0))
+
+
+def cast_adaptive(caster: RayCaster, planes: FacePlanes, camera: Camera, dirs: np.ndarray,
+                  tile: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """(t (H*W,) float32, face (H*W,) int32, rays cast) of one view, as ``caster.cast`` over all its
+    pixels would give (see the module docs for where it can differ).
+
+    dirs (H*W, 3) float32 world directions of the camera's pixels, row-major; tile a power of two
+    >= 1 (1 casts every pixel).
+    """
+    width, height = camera.width, camera.height
+    center = camera.pose[:3, 3].astype(np.float32)
+    n = width * height
+    t = np.full(n, np.inf, np.float32)
+    face = np.full(n, -1, np.int32)
+    done = np.zeros(n, bool)
+    cast = 0
+
+    def run(idx: np.ndarray) -> None:
+        nonlocal cast
+        idx = idx[~done[idx]]
+        if len(idx) == 0:
+            return
+        origins = np.empty((len(idx), 3), np.float32)
+        origins[:] = center
+        t[idx], face[idx] = caster.cast(origins, dirs[idx])
+        done[idx] = True
+        cast += len(idx)
+
+    face_img = face.reshape(height, width)
+    t_img = t.reshape(height, width)
+    s = max(1, int(tile))
+    rows, cols = lattice(height, s), lattice(width, s)
+    if len(rows) < 2 or len(cols) < 2 or s == 1:
+        run(np.arange(n))
+        return t, face, cast
+    images = _bar_images(planes, camera)
+    bar_of_face = planes.bar_of_face if planes.bar_of_face is not None else np.full(len(planes.offset), -1)
+    active = np.ones((len(rows) - 1, len(cols) - 1), bool)
+    offset = planes.offset - planes.normal @ center.astype(np.float64)  # per plane: n . (v0 - c)
+    while True:
+        # cast the corners of the tiles still open at this level
+        corner = np.zeros((len(rows), len(cols)), bool)
+        corner[:-1, :-1] |= active
+        corner[1:, :-1] |= active
+        corner[:-1, 1:] |= active
+        corner[1:, 1:] |= active
+        rr, cc = np.nonzero(corner)
+        run(rows[rr] * width + cols[cc])
+        if s == 1:
+            break
+        lat = face_img[np.ix_(rows, cols)]
+        f00 = lat[:-1, :-1]
+        flat = active & (f00 >= 0) & (f00 == lat[1:, :-1]) & (f00 == lat[:-1, 1:]) & (f00 == lat[1:, 1:])
+        ti, tj = np.nonzero(flat)
+        if len(ti):  # ... and no slender part may stand in front of the tile
+            tl = t_img[np.ix_(rows, cols)]
+            deepest = np.maximum(np.maximum(tl[ti, tj], tl[ti + 1, tj]), np.maximum(tl[ti, tj + 1], tl[ti + 1, tj + 1]))
+            z1, id1, z2 = _occluders(images, rows, cols)
+            own = bar_of_face[f00[ti, tj]]  # a slender part cannot stand in front of itself
+            z1, id1, z2 = z1[ti, tj], id1[ti, tj], z2[ti, tj]
+            ok = np.where(id1 == own, z2, z1) >= deepest
+            flat[ti[~ok], tj[~ok]] = False
+            ti, tj = ti[ok], tj[ok]
+        if len(ti):
+            # the pixels of the flat tiles (a tile's last row and column are its neighbours' first;
+            # offsets past a short last tile are clipped onto its edge, where they repeat a pixel)
+            off = np.arange(s + 1)
+            r = np.minimum(rows[ti][:, None] + off, rows[ti + 1][:, None])  # (k, s + 1)
+            c = np.minimum(cols[tj][:, None] + off, cols[tj + 1][:, None])
+            blk = (r[:, :, None] * width + c[:, None, :]).reshape(len(ti), -1)  # (k, (s + 1)^2)
+            ft = f00[ti, tj]
+            # per pixel n . d with the tile's normal, in float64: the depths then round like the
+            # caster's, and few points change voxel
+            nrm = planes.normal[ft][:, None, :]
+            d = dirs[blk]  # (k, P, 3)
+            den = d[..., 0] * nrm[..., 0]
+            den += d[..., 1] * nrm[..., 1]
+            den += d[..., 2] * nrm[..., 2]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                depth = (offset[ft][:, None] / den).astype(np.float32)
+            # a grazing plane is left to be cast; a pixel already known keeps its value
+            good = ~done[blk] & np.isfinite(depth) & (depth > 0)
+            idx = blk[good]
+            t[idx] = depth[good]
+            face[idx] = np.broadcast_to(ft[:, None], blk.shape)[good]
+            done[idx] = True
+        s //= 2
+        rows2, cols2 = lattice(height, s), lattice(width, s)
+        pr = np.searchsorted(rows, rows2[:-1], side="right") - 1
+        pc = np.searchsorted(cols, cols2[:-1], side="right") - 1
+        active = (active & ~flat)[pr[:, None], pc[None, :]]
+        rows, cols = rows2, cols2
+    run(np.flatnonzero(~done))  # nothing should be left; a safety net that keeps the view exact
+    return t, face, cast

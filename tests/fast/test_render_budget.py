@@ -1,0 +1,142 @@
+"""The adaptive ray budget (render.rays = adaptive): the same pixels, points and labels as the full
+render from a fraction of its rays; slender parts are not stepped over; the config key."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from pydantic import ValidationError
+
+from assist3d.config import RenderConfig
+from assist3d.core.contracts import Room
+from assist3d.render import make_caster, render_point_cloud, vantage_cameras
+from assist3d.render.budget import cast_adaptive, face_planes, lattice, slender_parts
+from assist3d.render.camera import pixel_directions, rotate_directions
+from assist3d.render.fusion import scene_grid
+from assist3d.render.shapes import box_part, combine_parts, shell_parts, sphere_part
+
+SMALL = dict(width=160, height=120, fx=144.5, fy=144.5, vantage_points=3, views_per_point=8, vantage_clearance=0.25)
+
+
+def room_with_bars():
+    """An L-shaped room with furniture-sized boxes, a sphere and a row of 2 cm bars (a crib's side)
+    standing 0.3 m in front of a wall."""
+    room = Room(((0.0, 0.0), (5.0, 0.0), (5.0, 2.0), (3.0, 2.0), (3.0, 4.0), (0.0, 4.0)), 2.5, ceiling=False)
+    parts = shell_parts(room)
+    parts.append(box_part((1.0, 0.8, 0.0), (0.8, 0.5, 0.9), 0.3, (200, 30, 30), 1, 0))
+    parts.append(box_part((4.2, 1.0, 0.0), (0.9, 0.6, 1.8), -0.6, (30, 200, 30), 2, 1))
+    parts.append(sphere_part((2.0, 2.0, 0.9), 0.25, 2, (220, 220, 20), 4, 2))
+    for k in range(12):
+        parts.append(box_part((0.8 + 0.09 * k, 3.7, 0.0), (0.02, 0.02, 1.0), 0.0, (120, 80, 40), 5, 3))
+    return room, combine_parts(parts)
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return room_with_bars()
+
+
+def _views(scene, cfg):
+    room, mesh = scene
+    from assist3d.render import select_vantage_points
+
+    centers = select_vantage_points(mesh, room, cfg, rng=np.random.default_rng(3))
+    return vantage_cameras(centers, cfg)
+
+
+def test_lattice_nests_and_ends_on_the_last_pixel():
+    for n in (8, 72, 480, 641):
+        for s in (1, 2, 4, 8, 16):
+            a, b = lattice(n, s), lattice(n, max(s // 2, 1))
+            assert a[0] == 0 and a[-1] == n - 1 and np.all(np.diff(a) > 0) and np.all(np.diff(a) <= s)
+            assert np.isin(a, b).all()
+
+
+def test_adaptive_views_equal_the_full_views_from_fewer_rays(scene):
+    room, mesh = scene
+    cfg = RenderConfig(**SMALL)
+    caster = make_caster("embree", mesh.vertices, mesh.faces)
+    planes = face_planes(mesh)
+    cams = _views(scene, cfg)
+    c0 = cams[0]
+    cam_dirs = pixel_directions(c0.width, c0.height, c0.fx, c0.fy, c0.cx, c0.cy).astype(np.float32)
+    cast = pixels = 0
+    for cam in cams:
+        dirs = rotate_directions(cam_dirs, cam.pose)
+        origins = np.zeros_like(dirs)
+        origins[:] = cam.pose[:3, 3].astype(np.float32)
+        t_ref, f_ref = caster.cast(origins, dirs)
+        t, f, n = cast_adaptive(caster, planes, cam, dirs, 8)
+        # the same pixels: the same triangle and depth (to rounding), but for the odd pixel where a
+        # corner of a box pokes into a tile without touching its corner rays
+        np.testing.assert_array_equal(f >= 0, f_ref >= 0)
+        same = f == f_ref
+        assert np.count_nonzero(~same) <= 2
+        hit = same & (f_ref >= 0)
+        np.testing.assert_allclose(t[hit], t_ref[hit], rtol=2e-6)
+        assert np.all(np.isinf(t[f < 0]))
+        cast += n
+        pixels += len(f)
+    assert cast < 0.6 * pixels  # a plain room: most tiles are flat
+
+
+def test_slender_parts_are_found_and_keep_their_pixels(scene):
+    room, mesh = scene
+    bars = slender_parts(mesh)
+    # the 12 bars (2 x 2 x 100 cm) are slender; the furniture boxes and the sphere are not
+    assert len(bars) == 12
+    assert np.allclose(np.sort(np.ptp(bars, axis=1), axis=1)[:, 2], 1.0, atol=1e-3)
+    of_face = face_planes(mesh).bar_of_face
+    assert set(np.unique(of_face[mesh.face_instance == 5])) == set(range(12))
+    assert np.all(of_face[mesh.face_instance != 5] == -1)
+    # without them in the budget, a coarse lattice steps over the bars: the test above would fail
+    caster = make_caster("embree", mesh.vertices, mesh.faces)
+    planes = face_planes(mesh)
+    blind = type(planes)(planes.normal, planes.offset, np.zeros((0, 8, 3)), None)
+    cfg = RenderConfig(**SMALL)
+    cams = _views(scene, cfg)
+    c0 = cams[0]
+    cam_dirs = pixel_directions(c0.width, c0.height, c0.fx, c0.fy, c0.cx, c0.cy).astype(np.float32)
+    lost = kept = 0
+    for cam in cams:
+        dirs = rotate_directions(cam_dirs, cam.pose)
+        origins = np.zeros_like(dirs)
+        origins[:] = cam.pose[:3, 3].astype(np.float32)
+        _, f_ref = caster.cast(origins, dirs)
+        bar_px = mesh.face_instance[np.maximum(f_ref, 0)] == 5
+        bar_px &= f_ref >= 0
+        _, f_blind, _ = cast_adaptive(caster, blind, cam, dirs, 8)
+        _, f_safe, _ = cast_adaptive(caster, planes, cam, dirs, 8)
+        lost += int(np.count_nonzero(bar_px & (f_blind != f_ref)))
+        kept += int(np.count_nonzero(bar_px & (f_safe == f_ref)))
+        assert np.array_equal(f_safe[bar_px], f_ref[bar_px])
+    assert kept > 0 and lost > 0
+
+
+def test_adaptive_cloud_covers_the_full_cloud(scene):
+    """Coverage and label agreement on a small scene (docs/generation.md, 'Ray budget')."""
+    room, mesh = scene
+    full = render_point_cloud(mesh, room, RenderConfig(**SMALL), rng=np.random.default_rng(7))
+    fast = render_point_cloud(mesh, room, RenderConfig(**SMALL, rays="adaptive"), rng=np.random.default_rng(7))
+    grid = scene_grid(mesh, 0.02)
+    kr, kf = grid.keys(full.sample.coord), grid.keys(fast.sample.coord)
+    common, ir, jf = np.intersect1d(kr, kf, assume_unique=True, return_indices=True)
+    assert len(common) / len(kr) >= 0.99
+    assert np.mean(full.sample.instance[ir] == fast.sample.instance[jf]) >= 0.999
+    assert set(np.unique(full.sample.instance)) == set(np.unique(fast.sample.instance))
+    np.testing.assert_allclose(fast.pixel_counts, full.pixel_counts, rtol=1e-3)
+    assert fast.stats["rays_cast"] < full.stats["rays"] and fast.stats["ray_budget"] == "adaptive"
+    assert "rays_cast" not in full.stats  # the full render's record is as it was
+    # same seed, same cloud
+    again = render_point_cloud(mesh, room, RenderConfig(**SMALL, rays="adaptive", threads=1),
+                               rng=np.random.default_rng(7))
+    np.testing.assert_array_equal(again.sample.coord, fast.sample.coord)
+    np.testing.assert_array_equal(again.sample.instance, fast.sample.instance)
+
+
+def test_ray_tile_is_a_power_of_two():
+    assert RenderConfig(rays="adaptive", ray_tile=16).ray_tile == 16
+    with pytest.raises(ValidationError, match="power of two"):
+        RenderConfig(ray_tile=12)
+    with pytest.raises(ValidationError):
+        RenderConfig(rays="half")
