@@ -106,7 +106,7 @@ def main() -> None:
 def end_to_end(args: argparse.Namespace) -> None:
     import shutil
 
-    from assist3d.bench.data import open_dataset
+    from assist3d.data import open_dataset
     from assist3d.bench.evaluation import evaluate_dataset
 
     rng = np.random.default_rng(args.seed)

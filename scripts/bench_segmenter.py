@@ -19,7 +19,7 @@ import time
 
 import torch
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.learn.segmenter.config import parse_segmenter_config
 from assist3d.learn.segmenter.data import Scene
 from assist3d.learn.segmenter.loader import build_batch

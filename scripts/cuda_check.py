@@ -286,7 +286,7 @@ def mask3d_bench() -> dict:
 
 
 def segmenter_shipped(scan: Path) -> dict:
-    from assist3d.bench.data.array import ArrayDataset
+    from assist3d.data.array import ArrayDataset
     from assist3d.bench.evaluation.ap import match_scene, summarize
     from assist3d.learn.segmenter.checkpoint import load_segmenter
     from assist3d.learn.segmenter.hybrid import segment_hybrid

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.bench.evaluation.compare import room_means
 from assist3d.bench.evaluation.runner import evaluate_dataset
 

@@ -145,7 +145,7 @@ def build_examples(root: Path) -> None:
                          segment=np.full(n, -1, np.int32), valid=np.ones(n, bool))
     (scans / "scan.ply").write_bytes(ply_bytes(sample))
     # the same scan as a ScanNet scene folder (mesh, over-segmentation, aggregation, label table)
-    from assist3d.bench.data.ply import write_ply
+    from assist3d.data.ply import write_ply
 
     sn = root / "scannet" / "scans" / "scene0000_00"
     sn.mkdir(parents=True)
@@ -233,14 +233,14 @@ def _import(manifest: str) -> Callable[[Path], object]:
 
 def _read_scan(name: str) -> Callable[[Path], object]:
     def read(d: Path):
-        from assist3d.bench.data.scanfile import read_scan
+        from assist3d.data.scanfile import read_scan
 
         return read_scan(d / name)
     return read
 
 
 def _read_dataset(d: Path):
-    from assist3d.bench.data import open_dataset
+    from assist3d.data import open_dataset
     from assist3d.bench.metrics.report import _load_layout
     from assist3d.export.manifest import read_manifest
     from assist3d.export.writer import read_scene_meta
@@ -256,7 +256,7 @@ def _read_dataset(d: Path):
 
 
 def _read_scannet(d: Path):
-    from assist3d.bench.data import open_dataset
+    from assist3d.data import open_dataset
 
     return [len(s) for s in open_dataset(f"scannet:{d}")]
 
@@ -783,7 +783,7 @@ def _warm_imports() -> None:
     """Import what the readers use once, so each forked child starts warm."""
     import assist3d.assets.catalog  # noqa: F401
     import assist3d.assets.meshes  # noqa: F401
-    import assist3d.bench.data  # noqa: F401
+    import assist3d.data  # noqa: F401
     import assist3d.bench.evaluation.predictions  # noqa: F401
     import assist3d.bench.metrics.report  # noqa: F401
     import assist3d.cli.segment  # noqa: F401

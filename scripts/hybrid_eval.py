@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.bench.evaluation.ap import match_scene, summarize
 from assist3d.bench.evaluation.compare import room_means
 from assist3d.core.fileio import write_json_atomic

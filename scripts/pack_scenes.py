@@ -27,7 +27,7 @@ STEP = 0.002  # metres per quantisation step
 
 
 def pack(out: Path, specs: list[str], exact: bool) -> None:
-    from assist3d.bench.data import open_dataset
+    from assist3d.data import open_dataset
 
     arrays: dict[str, np.ndarray] = {}
     for k, spec in enumerate(specs):

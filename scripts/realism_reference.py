@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.core.fileio import write_json_atomic
 from assist3d.bench.metrics.realism import (RealismReference, RealismStats, matched_sample, realism_score, realism_spec,
                                             realism_standard_error, scene_stats, stats_of_dataset)

@@ -3,7 +3,7 @@
 #   REAL=../shared/data/real python diag.py MODEL.pt [MODEL.pt ...]
 import os, sys, numpy as np, torch
 torch.set_num_threads(1)
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.infer import segment_points
 for path in sys.argv[1:]:

@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.learn.segmenter.config import SegmenterConfig
 from assist3d.learn.segmenter.data import Scene, make_example
 from assist3d.learn.segmenter.features import voxel_features, voxelize

@@ -6,7 +6,7 @@
 import os, sys, numpy as np, torch
 torch.set_num_threads(2)
 from scipy.spatial import cKDTree
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.features import voxelize
 from assist3d.learn.segmenter.infer import predict_scan

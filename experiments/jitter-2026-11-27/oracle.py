@@ -11,7 +11,7 @@ import numpy as np
 import torch
 from scipy.spatial import cKDTree
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.bench.evaluation.ap import match_scene, summarize
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.cluster import instance_score, point_masks, radius_components

@@ -9,7 +9,7 @@ import numpy as np
 import torch
 from scipy.spatial import cKDTree
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.features import voxel_features, voxelize
 from assist3d.learn.segmenter.infer import predict_voxels

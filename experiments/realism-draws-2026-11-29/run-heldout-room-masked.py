@@ -8,7 +8,7 @@ import sys
 
 import numpy as np
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.bench.metrics.realism import RealismReference, matched_sample, realism_score, scene_stats, stats_of_dataset
 
 STRUCTURE = (1, 39)

@@ -19,7 +19,7 @@ import sys
 import numpy as np
 from scipy import ndimage
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.bench.metrics.realism import CELL, RealismReference, RealismStats, realism_score, scene_stats
 
 TRIES = 200

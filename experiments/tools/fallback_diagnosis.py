@@ -23,7 +23,7 @@ import json
 import numpy as np
 import torch
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.hybrid import HybridConfig, segment_hybrid
 from assist3d.learn.segmenter.infer import segment_points

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.bench.evaluation.ap import match_scene, summarize
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.cluster import mask_nms, radius_components

@@ -31,7 +31,7 @@ import numpy as np
 import torch
 from scipy.spatial import cKDTree
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.bench.evaluation.ap import match_scene, summarize
 from assist3d.core.fileio import write_json_atomic
 from assist3d.learn.segmenter.checkpoint import load_segmenter

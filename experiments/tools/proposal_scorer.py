@@ -34,7 +34,7 @@ import torch
 from scipy.sparse import csr_matrix
 from scipy.stats import spearmanr
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.bench.evaluation.ap import match_scene, summarize
 from assist3d.core.fileio import write_json_atomic
 from assist3d.learn.segmenter.checkpoint import load_segmenter

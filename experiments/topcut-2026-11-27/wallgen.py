@@ -4,7 +4,7 @@
 # above a height, or both.
 import sys, numpy as np, torch
 torch.set_num_threads(2)
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.features import voxel_features, voxelize, shape_features
 from assist3d.learn.segmenter.infer import predict_voxels

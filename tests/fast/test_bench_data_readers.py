@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from assist3d.bench.data import open_dataset, parse_spec
-from assist3d.bench.data.ply import read_ply, write_ply
+from assist3d.data import open_dataset, parse_spec
+from assist3d.data.ply import read_ply, write_ply
 from assist3d.core.errors import ConfigError, DataError
 
 # A 4 x 2 grid of vertices on the z = 0 plane, two triangles per cell.
@@ -194,7 +194,7 @@ def test_s3dis_reader_tolerates_the_corrupt_line(tmp_path):
     ds = open_dataset(f"s3dis:{tmp_path}")
     assert ds.scene_ids == ["Area_5_hallway_6"]
     handler = _Collect()
-    logger = logging.getLogger("assist3d.bench.data.s3dis")
+    logger = logging.getLogger("assist3d.data.s3dis")
     logger.addHandler(handler)
     try:
         s = ds[0]

@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from assist3d.cli import app
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.core.errors import DataError
 from assist3d.bench.evaluation import (
     convert_predictions,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.bench.evaluation import MIN_REGION_SIZE, evaluate_dataset, evaluate_scene, save_predictions
 
 

@@ -120,7 +120,7 @@ def test_show_writes_beside_the_dataset_unless_told(tmp_path, monkeypatch):
 
 
 def test_export_ply_writes_a_whole_dataset_elsewhere_or_into_its_scenes(tmp_path):
-    from assist3d.bench.data.ply import read_ply
+    from assist3d.data.ply import read_ply
 
     ds = _dataset(tmp_path / "ds", scenes=3)
     arrays_before = {k: v for k, v in _tree(ds).items() if k.endswith(".npy")}

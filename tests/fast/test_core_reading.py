@@ -30,7 +30,7 @@ ALLOWED: dict[tuple[str, str], str] = {
     ("learn/segmenter/probe.py", "open"): "a child process's log file, opened for writing",
     ("llm/schema.py", "json.loads"): "an LLM answer held in memory, not a file",
     ("llm/client.py", "json.loads"): "an HTTP response body held in memory, bounded by llm.max_response_bytes",
-    ("bench/data/s3dis.py", "np.loadtxt"): "parses bytes already read through the layer",
+    ("data/s3dis.py", "np.loadtxt"): "parses bytes already read through the layer",
     ("core/taxonomy/classes.py", "read_text"): "a class list packaged with assist3d (importlib.resources)",
     ("llm/prompts.py", "read_text"): "a prompt template packaged with assist3d (importlib.resources)",
     ("bench/metrics/realism.py", "read_text"): "the reference packaged with assist3d (importlib.resources)",

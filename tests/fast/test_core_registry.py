@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from assist3d.config import parse_config
-from assist3d.bench.data import READERS, Reader, open_dataset
-from assist3d.bench.data.array import ArrayDataset
+from assist3d.data import READERS, Reader, open_dataset
+from assist3d.data.array import ArrayDataset
 from assist3d.core.errors import ConfigError, RenderError
 from assist3d.core.registry import Registry
 from assist3d.render.raycast import CASTERS, NumpyCaster, make_caster

@@ -13,8 +13,8 @@ from typing import Iterator
 import numpy as np
 import pytest
 
-from assist3d.bench.data import open_dataset
-from assist3d.bench.data.ply import write_ply
+from assist3d.data import open_dataset
+from assist3d.data.ply import write_ply
 from assist3d.core.errors import ConfigError, DataError
 
 
@@ -107,7 +107,7 @@ def test_array_reader_cleans_colours_and_negative_instances_with_a_warning(tmp_p
     a[4, 7] = -7
     path = tmp_path / "cleaned.npy"
     np.save(path, a)
-    with warnings_of("assist3d.bench.data") as msgs:
+    with warnings_of("assist3d.data") as msgs:
         s = open_dataset(f"array:{path}")[0]
     assert s.color[1, 0] == 255 and s.color[2, 1] == 0 and s.color[3, 2] == 0
     assert s.instance[4] == -1 and s.instance[5] == 6
@@ -157,7 +157,7 @@ def test_pointcept_cleans_ignore_indices_and_bad_normals_with_warnings(tmp_path)
     normal = np.tile(np.array([0, 0, 1], np.float32), (5, 1))
     normal[2] = np.nan
     np.save(d / "normal.npy", normal)
-    with warnings_of("assist3d.bench.data") as msgs:
+    with warnings_of("assist3d.data") as msgs:
         s = open_dataset(f"pointcept:{d}")[0]
     assert s.instance.tolist() == [0, -1, 1, -1, 2] and s.segment.tolist() == [4, -1, 5, 5, 6]
     assert s.normal[2].tolist() == [0, 0, 0] and s.normal[0].tolist() == [0, 0, 1]
@@ -214,7 +214,7 @@ def test_s3dis_refuses_overflowing_coordinates_and_empty_rooms(tmp_path):
     with pytest.raises(DataError, match=r"Annotations: no points"):
         open_dataset(f"s3dis:{tmp_path}")[0]
     (anno / "chair_1.txt").write_text("1 2 3 10 20 300\n")
-    with warnings_of("assist3d.bench.data") as msgs:
+    with warnings_of("assist3d.data") as msgs:
         s = open_dataset(f"s3dis:{tmp_path}")[0]
     assert s.color[0].tolist() == [10, 20, 255] and any("chair_1.txt: 1 of 1 points" in m for m in msgs), msgs
 
@@ -249,7 +249,7 @@ def test_evaluate_warns_on_scenes_whose_labels_are_all_void(tmp_path):
 
 
 def test_segment_raw_inputs_refuse_non_numbers_and_clean_colours(tmp_path):
-    from assist3d.bench.data.scanfile import read_scan
+    from assist3d.data.scanfile import read_scan
     from assist3d.learn.segmenter.predictor import usable_points
 
     path = tmp_path / "scan.npy"

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from assist3d.bench.data import open_dataset
-from assist3d.bench.data.ply import read_ply
+from assist3d.data import open_dataset
+from assist3d.data.ply import read_ply
 from assist3d.bench.evaluation import save_predictions
 from assist3d.cli import app
 from assist3d.core.contracts import PointSample, Room, SceneLayout

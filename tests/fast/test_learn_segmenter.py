@@ -18,7 +18,7 @@ from typer.testing import CliRunner  # noqa: E402
 
 from assist3d.cli import app  # noqa: E402
 from assist3d.config import parse_config  # noqa: E402
-from assist3d.bench.data import open_dataset  # noqa: E402
+from assist3d.data import open_dataset  # noqa: E402
 from assist3d.learn.engine.toy import make_toy_scene  # noqa: E402
 from assist3d.core.errors import ConfigError, DataError, FaultError  # noqa: E402
 from assist3d.bench.evaluation.ap import match_scene, summarize  # noqa: E402
@@ -674,7 +674,7 @@ def _write_model(path: Path) -> Path:
 
 @pytest.mark.slow
 def test_segment_a_ply_and_an_npy_and_refuse_bad_input(tmp_path):
-    from assist3d.bench.data.ply import read_ply, write_ply
+    from assist3d.data.ply import read_ply, write_ply
 
     s = _room_with_boxes()
     ckpt = _write_model(tmp_path / "m.pt")
@@ -730,7 +730,7 @@ def test_segment_reads_y_up_and_millimetre_scans_with_the_frame_flags(tmp_path):
     z-up result, for the geometric reference and through the network (hybrid); its PLY keeps the
     input's coordinates. A millimetre scan read as metres is refused with one line that names the
     file and --units; with --units mm it is segmented. Unknown values are refused by name."""
-    from assist3d.bench.data.ply import read_ply
+    from assist3d.data.ply import read_ply
 
     s = _room_with_boxes()
     ckpt = _write_model(tmp_path / "m.pt")
@@ -980,7 +980,7 @@ def test_predictor_segments_a_scan_from_python_and_takes_a_registered_step(tmp_p
         assert {p.name for p in (tmp_path / "out").iterdir()} == {"toy.npz", "toy.ply", "toy.png"}
         assert rows[0]["files"] == [str(tmp_path / "out" / f"toy.{ext}") for ext in ("npz", "ply", "png")]
         # the PLY names each point's instance (the mask holding it, -1 for none) beside its colour
-        from assist3d.bench.data.ply import read_ply
+        from assist3d.data.ply import read_ply
 
         vertex = read_ply(tmp_path / "out" / "toy.ply").vertex
         with np.load(tmp_path / "out" / "toy.npz") as z:

@@ -7,7 +7,7 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
-from assist3d.bench.data import open_dataset  # noqa: E402
+from assist3d.data import open_dataset  # noqa: E402
 from assist3d.bench.evaluation.ap import match_scene, summarize  # noqa: E402
 from assist3d.learn.engine.toy import make_toy_scene  # noqa: E402
 from assist3d.learn.segmenter.checkpoint import load_segmenter  # noqa: E402

@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 from pydantic import BaseModel, ValidationError
 
 from assist3d.config import GenerateConfig, load_config, parse_config
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.learn.engine.config import TrainConfig, load_train_config, parse_train_config
 from assist3d.core.errors import AssistError, ConfigError
 from assist3d.learn.segmenter.config import SegmenterConfig, parse_segmenter_config
@@ -93,7 +93,7 @@ def test_array_reader_gives_a_valid_sample_or_its_own_error(scratch, a):
 @SETTINGS
 @given(a=scan_arrays())
 def test_segment_point_reader_gives_usable_points_or_its_own_error(scratch, a):
-    from assist3d.bench.data.scanfile import read_scan
+    from assist3d.data.scanfile import read_scan
     from assist3d.learn.segmenter.predictor import usable_points
 
     path = _save(scratch, "probe_scan_b.npy", a)

@@ -19,7 +19,7 @@ import pytest
 from assist3d.assets.catalog import Catalog
 from assist3d.config import LLMConfig
 from assist3d.core.contracts import AssetRecord, MeshData
-from assist3d.bench.data import open_dataset
+from assist3d.data import open_dataset
 from assist3d.core.errors import AssetError, AssistError, DataError
 from assist3d.bench.evaluation import evaluate_dataset, export_scannet_txt, import_scannet_txt
 from assist3d.export.writer import file_digest, read_scene_meta

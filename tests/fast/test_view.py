@@ -136,7 +136,7 @@ def test_a_scan_with_a_prediction_and_non_finite_points_stays_aligned(tmp_path):
 
 
 def test_a_segment_output_is_read_from_its_npz_and_the_ply_beside_it(tmp_path):
-    from assist3d.bench.data.ply import write_ply
+    from assist3d.data.ply import write_ply
 
     a = _array_scan(tmp_path / "scan.npy", 300)
     seg = tmp_path / "seg"

@@ -58,7 +58,7 @@ def evaluate(
                                 help=f"Read and match scenes in this many processes (at most {MAX_WORKERS})."),
 ) -> None:
     """Score instance predictions class-agnostically, exactly like the ScanNet benchmark script."""
-    from ..bench.data import open_dataset
+    from ..data import open_dataset
     from ..bench.evaluation import METRIC_KEYS, default_feature, evaluate_dataset
 
     dataset = open_dataset(gt)

@@ -28,6 +28,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import pickle
 import re
 import stat
 import tokenize
@@ -360,9 +361,7 @@ def read_checkpoint(path: str | os.PathLike, *, error: type[AssistError] = DataE
                     map_location: str = "cpu") -> Any:
     """The object in PyTorch archive ``path``, loaded with ``weights_only=True``: a file holding any
     other object than tensors, numbers, text and containers is refused and runs nothing."""
-    import pickle
-
-    import torch
+    import torch  # an optional extra: only checkpoint readers need it
 
     p = Path(path)
     _check_file(p, error, "checkpoint not found")

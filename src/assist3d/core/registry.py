@@ -1,6 +1,6 @@
 """One way to plug in an implementation: a named registry per extension point.
 
-Dataset readers (:data:`assist3d.bench.data.READERS`), ray casters (:data:`assist3d.render.raycast.CASTERS`)
+Dataset readers (:data:`assist3d.data.READERS`), ray casters (:data:`assist3d.render.raycast.CASTERS`)
 and relation planners (:data:`assist3d.planning.planners.PLANNERS`) are each a :class:`Registry`:
 a name maps to a factory, registered with the decorator where the implementation lives::
 

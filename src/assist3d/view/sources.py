@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..bench.data import READERS, open_dataset
-from ..bench.data.ply import read_ply
-from ..bench.data.scanfile import read_scan
+from ..data import READERS, open_dataset
+from ..data.ply import read_ply
+from ..data.scanfile import read_scan
 from ..bench.evaluation.predictions import load_predictions
 from ..core import reading
 from ..core.errors import ConfigError, DataError, shown

@@ -10,7 +10,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..data.base import SceneDataset
+from ...data.base import SceneDataset
 from ...core.errors import DataError
 from ...core.errors import shown as show_text
 from ...core.interrupts import worker_pool

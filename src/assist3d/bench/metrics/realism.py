@@ -55,7 +55,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from ..data import READERS, open_dataset, parse_spec
+from ...data import READERS, open_dataset, parse_spec
 from ...core import reading
 from ...core.errors import DataError, shown
 

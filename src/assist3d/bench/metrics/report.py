@@ -13,7 +13,7 @@ import numpy as np
 from ...assets import open_catalog
 from ...assets.catalog import Catalog
 from ...core.contracts import SceneLayout
-from ..data import open_dataset
+from ...data import open_dataset
 from ...core import reading
 from ...core.errors import AssistError, DataError, shown
 from ...export.manifest import read_manifest

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.contracts import PointSample
-from ...bench.data import open_dataset
+from ...data import open_dataset
 from ...core.errors import ConfigError
 from .augment import augment_points
 from .config import AugmentConfig, DataSpec
@@ -18,7 +18,7 @@ log = logging.getLogger(__name__)
 
 
 def open_spec(spec: str):
-    """Open ``FORMAT:PATH`` through the readers of :mod:`assist3d.bench.data`."""
+    """Open ``FORMAT:PATH`` through the readers of :mod:`assist3d.data`."""
     return open_dataset(spec)
 
 

@@ -31,10 +31,10 @@ from typing import Callable, Iterator, Sequence
 import numpy as np
 import torch
 
-from ...bench.data import READERS, open_dataset
-from ...bench.data.base import MAX_COORD_M
-from ...bench.data.ply import write_ply
-from ...bench.data.scanfile import ScanFile, read_scan
+from ...data import READERS, open_dataset
+from ...data.base import MAX_COORD_M
+from ...data.ply import write_ply
+from ...data.scanfile import ScanFile, read_scan
 from ...bench.evaluation.ap import match_scene, summarize
 from ...bench.evaluation.predictions import save_predictions
 from ...core.errors import DataError, shown

@@ -42,7 +42,7 @@ from typing import Callable, Sequence
 import numpy as np
 import yaml
 
-from ...bench.data import open_dataset
+from ...data import open_dataset
 from ...core import reading
 from ...core.errors import ConfigError, DataError, FaultError, shown
 from ...core.interrupts import set_parent_death_signal

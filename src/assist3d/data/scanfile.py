@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...core.contracts import PointSample
-from ...core.errors import DataError, shown
+from ..core.contracts import PointSample
+from ..core.errors import DataError, shown
 from .array import ArrayDataset
 from .base import REAL_KINDS, SceneDataset, checked_coords, clean_colors, read_npy
 from .ply import read_ply

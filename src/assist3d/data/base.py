@@ -14,9 +14,9 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from ...core.contracts import PointSample
-from ...core import reading
-from ...core.errors import ConfigError, DataError, shown
+from ..core.contracts import PointSample
+from ..core import reading
+from ..core.errors import ConfigError, DataError, shown
 
 log = logging.getLogger(__name__)
 

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...core import reading
-from ...core.errors import DataError, shown
-from ...core.fileio import write_bytes_atomic
+from ..core import reading
+from ..core.errors import DataError, shown
+from ..core.fileio import write_bytes_atomic
 from .base import checked_coords, clean_colors, clean_normals
 
 log = logging.getLogger(__name__)

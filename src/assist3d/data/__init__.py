@@ -30,8 +30,8 @@ from pathlib import Path
 from typing import Callable
 from urllib.parse import parse_qsl
 
-from ...core.errors import ConfigError
-from ...core.registry import Registry
+from ..core.errors import ConfigError
+from ..core.registry import Registry
 from .array import ArrayDataset
 from .base import SceneDataset
 from .pointcept import PointceptDataset

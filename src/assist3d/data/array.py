@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...core.contracts import PointSample
-from ...core.errors import DataError
+from ..core.contracts import PointSample
+from ..core.errors import DataError
 from .base import (MAX_INSTANCE_ID, REAL_KINDS, SceneDataset, checked_coords, clean_colors, integer_labels, object_policy,
                    read_npy)
 

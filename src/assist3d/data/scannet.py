@@ -25,9 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...core.contracts import PointSample
-from ...core import reading
-from ...core.errors import DataError, shown
+from ..core.contracts import PointSample
+from ..core import reading
+from ..core.errors import DataError, shown
 from .base import SceneDataset, instances_from_groups, integer_list, object_policy, read_json, require_key
 from .ply import read_scan_mesh
 

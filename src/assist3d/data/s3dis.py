@@ -34,11 +34,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ...core.contracts import PointSample
-from ...core import reading
-from ...core.errors import ConfigError, DataError, shown
-from ...core.fileio import write_bytes_atomic
-from ...core.paths import cache_root
+from ..core.contracts import PointSample
+from ..core import reading
+from ..core.errors import ConfigError, DataError, shown
+from ..core.fileio import write_bytes_atomic
+from ..core.paths import cache_root
 from .base import SceneDataset, checked_coords, clean_colors
 
 log = logging.getLogger(__name__)

@@ -32,9 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...core.contracts import PointSample
-from ...core.errors import DataError
-from ...export.writer import META_NAME, load_scene_arrays
+from ..core.contracts import PointSample
+from ..core.errors import DataError
+from ..export.writer import META_NAME, load_scene_arrays
 from .base import (MAX_CLASS_INDEX, MAX_INSTANCE_ID, SceneDataset, checked_coords, clean_colors, clean_normals,
                    integer_labels, read_npy)
 
