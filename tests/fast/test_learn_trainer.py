@@ -149,3 +149,29 @@ def test_the_one_loader_gives_the_same_batches_with_workers_and_stops_where_told
         StepLoader(_square).next()
     with pytest.raises(ConfigError, match="loader workers 65"):
         StepLoader(_square, workers=65)
+
+
+def test_transforms_compose_into_recipes_that_keep_rows_and_draw_in_order():
+    import numpy as np
+
+    from assist3d.learn.transforms import (Centre, ColorJitter, Compose, CropSquare, Mirror, Points, Rotate, Scale,
+                                           Thin)
+
+    g = np.random.default_rng(0)
+    coord = g.random((400, 3)) * [8.0, 6.0, 3.0]
+    color = g.random((400, 3)) * 255
+    whole = Points.of(coord, color)
+    recipe = Compose([CropSquare(3.0), Thin(0.5, 0.5, fallback=whole), Centre(xy_only=True), Mirror((0,)),
+                      Rotate(0.0, 0.0, np.pi), Scale(0.1), ColorJitter(0.2)])
+    a, b = recipe(whole, np.random.default_rng(5)), recipe(whole, np.random.default_rng(5))
+    assert np.array_equal(a.coord, b.coord) and np.array_equal(a.rows, b.rows)  # a pure function of the stream
+    assert 0 < len(a.rows) < 400 and np.array_equal(np.sort(a.rows), np.unique(a.rows))
+    # rows point back at the input: the crop keeps points of one 3 m window (before the rigid moves)
+    assert np.ptp(coord[a.rows, 0]) <= 3.0 + 1e-9 and np.ptp(coord[a.rows, 1]) <= 3.0 + 1e-9
+    # a rotation about z keeps each point's distance to the vertical axis through the (xy-centred) mean
+    r = Compose([Centre(xy_only=True), Rotate(0.0, 0.0, np.pi)])(whole, np.random.default_rng(1))
+    c = whole.coord[:, :2] - whole.coord[:, :2].mean(0)
+    assert np.allclose(np.hypot(*r.coord[:, :2].T), np.hypot(*c.T)) and np.allclose(r.coord[:, 2], whole.coord[:, 2])
+    # a crop that leaves too few points falls back to the whole scene
+    tiny = Compose([CropSquare(1e-6), Thin(1.0, 1.0, fallback=whole)])(whole, np.random.default_rng(2))
+    assert len(tiny.rows) == 400

@@ -12,6 +12,8 @@ import numpy as np
 from scipy.interpolate import RegularGridInterpolator
 from scipy.ndimage import gaussian_filter
 
+from ..transforms import (Centre, ColorJitter, ColorShift, Compose, Elastic, Mirror, Points, Rotate, Scale,
+                          rotation_matrix)  # noqa: F401  rotation_matrix: the name this module exported
 from .config import AugmentConfig
 
 
@@ -29,37 +31,15 @@ def elastic_distortion(xyz: np.ndarray, granularity: float, magnitude: float, *,
     return (xyz + interp(xyz) * magnitude).astype(xyz.dtype)
 
 
-def rotation_matrix(ax: float, ay: float, az: float) -> np.ndarray:
-    """``Rz @ Ry @ Rx`` for angles in radians about x, y and z."""
-    cx, sx, cy, sy, cz, sz = np.cos(ax), np.sin(ax), np.cos(ay), np.sin(ay), np.cos(az), np.sin(az)
-    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return rz @ ry @ rx
-
-
 def augment_points(coord: np.ndarray, color: np.ndarray, cfg: AugmentConfig, *,
                    rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """Augmented copies of ``coord`` (N, 3) float32 metres and ``color`` (N, 3) uint8."""
-    xyz = coord.astype(np.float64)
-    xyz = xyz - xyz.mean(0) + rng.uniform(-cfg.offset_m, cfg.offset_m, 3)
-    for axis in (0, 1):
-        if cfg.mirror and rng.random() < 0.5:
-            xyz[:, axis] = -xyz[:, axis]
-    if cfg.elastic and rng.random() < cfg.elastic_p:
-        for gran, mag in cfg.elastic:
-            xyz = elastic_distortion(xyz, gran, mag, rng=rng)
-    xyz = xyz * rng.uniform(1 - cfg.scale, 1 + cfg.scale, 3)
-    rot = rotation_matrix(rng.uniform(-cfg.rotate_xy_rad, cfg.rotate_xy_rad),
-                    rng.uniform(-cfg.rotate_xy_rad, cfg.rotate_xy_rad),
-                    rng.uniform(-cfg.rotate_z_rad, cfg.rotate_z_rad))
-    xyz = xyz @ rot.T
-    rgb = color.astype(np.float64)
-    if cfg.color_jitter > 0:
-        mean = rgb.mean()
-        contrast = 1 + rng.uniform(-cfg.color_jitter, cfg.color_jitter)
-        brightness = rng.uniform(-cfg.color_jitter, cfg.color_jitter) * 255
-        rgb = (rgb - mean) * contrast + mean + brightness
-    if cfg.rgb_shift > 0:
-        rgb = rgb + rng.uniform(-cfg.rgb_shift, cfg.rgb_shift, 3)
-    return xyz.astype(np.float32), np.clip(rgb, 0, 255).astype(np.uint8)
+    """Augmented copies of ``coord`` (N, 3) float32 metres and ``color`` (N, 3) uint8 (Mask3D's recipe of
+    :mod:`assist3d.learn.transforms`)."""
+    recipe = Compose([
+        Centre(offset=cfg.offset_m), *([Mirror((0, 1))] if cfg.mirror else []),
+        Elastic(tuple(tuple(pair) for pair in cfg.elastic), cfg.elastic_p, elastic_distortion),
+        Scale(cfg.scale, per_axis=True), Rotate(cfg.rotate_xy_rad, cfg.rotate_xy_rad, cfg.rotate_z_rad),
+        ColorJitter(cfg.color_jitter), ColorShift(cfg.rgb_shift),
+    ])
+    p = recipe(Points.of(coord, color), rng)
+    return p.coord.astype(np.float32), p.colors_u8()

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.contracts import PointSample
-from ..engine.augment import rotation_matrix
+from ..transforms import (CropSquare, Centre, ColorDrop, ColorJitter, Compose, Jitter, Mirror, Points, Rotate,
+                          Scale, ShiftZ, Thin)
 from .config import AugmentConfig, SegmenterConfig
 from .features import Voxels, voxel_features, voxelize
 
@@ -44,41 +45,16 @@ class Scene:
 
 
 def augment(scene: Scene, cfg: AugmentConfig, rng: np.random.Generator) -> Scene:
-    """A randomly cropped, thinned, moved and noised copy of ``scene``."""
-    xyz = scene.coord.astype(np.float64)
-    rows = np.arange(len(xyz))
-    if cfg.crop_m > 0:
-        lo, hi = xyz[:, :2].min(0), xyz[:, :2].max(0)
-        half = cfg.crop_m / 2
-        # centre of a window that stays inside the scene (or the scene's middle when it is smaller);
-        # written as low + span * u so rounding can never make the span negative
-        low = np.minimum(lo + half, (lo + hi) / 2)
-        span = np.maximum(np.maximum(hi - half, (lo + hi) / 2) - low, 0.0)
-        centre = low + span * np.array([rng.random(), rng.random()])
-        inside = np.all(np.abs(xyz[:, :2] - centre) <= half, axis=1)
-        rows = rows[inside]
-    keep = rng.uniform(cfg.keep_min, max(cfg.keep_min, cfg.keep_max))
-    rows = rows[rng.random(len(rows)) < keep]
-    if len(rows) < 10:  # a degenerate crop: fall back to the whole scene
-        rows = np.arange(len(xyz))
-    xyz = xyz[rows]
-    xyz[:, :2] -= xyz[:, :2].mean(0)
-    if rng.random() < 0.5:
-        xyz[:, 0] = -xyz[:, 0]
-    t = np.deg2rad(cfg.tilt_deg)
-    xyz = xyz @ rotation_matrix(rng.uniform(-t, t), rng.uniform(-t, t), rng.uniform(-np.pi, np.pi)).T
-    xyz *= rng.uniform(1 - cfg.scale, 1 + cfg.scale)
-    xyz[:, 2] += rng.uniform(*cfg.floor_shift)
-    xyz += rng.normal(0.0, rng.uniform(*cfg.jitter), xyz.shape)
-    color = scene.color[rows].astype(np.float64)
-    if cfg.color_drop > 0 and rng.random() < cfg.color_drop:
-        color = np.repeat(color.mean(1, keepdims=True), 3, 1)
-    if cfg.color_jitter > 0:
-        mean = color.mean()
-        color = (color - mean) * (1 + rng.uniform(-cfg.color_jitter, cfg.color_jitter)) + mean
-        color += rng.uniform(-cfg.color_jitter, cfg.color_jitter) * 255
-    return Scene(coord=xyz.astype(np.float32), color=np.clip(color, 0, 255).astype(np.uint8),
-                 instance=scene.instance[rows])
+    """A randomly cropped, thinned, moved and noised copy of ``scene`` (the segmenter's recipe of
+    :mod:`assist3d.learn.transforms`)."""
+    whole = Points.of(scene.coord, scene.color)
+    recipe = Compose([
+        CropSquare(cfg.crop_m), Thin(cfg.keep_min, cfg.keep_max, fallback=whole), Centre(xy_only=True),
+        Mirror((0,)), Rotate(np.deg2rad(cfg.tilt_deg), np.deg2rad(cfg.tilt_deg), np.pi), Scale(cfg.scale),
+        ShiftZ(*cfg.floor_shift), Jitter(*cfg.jitter), ColorDrop(cfg.color_drop), ColorJitter(cfg.color_jitter),
+    ])
+    p = recipe(whole, rng)
+    return Scene(coord=p.coord.astype(np.float32), color=p.colors_u8(), instance=scene.instance[p.rows])
 
 
 def targets(vox: Voxels) -> tuple[np.ndarray, np.ndarray]:
