@@ -27,7 +27,7 @@ def register(app: typer.Typer) -> None:
 @export_app.command("scannet")
 def export_scannet_cmd(
     data: Path = typer.Argument(..., help="A dataset folder written by 'assist3d generate'."),
-    out: Path = typer.Argument(..., help="Output folder: scans/sceneXXXX_YY/, the label map, the split lists."),
+    out: Path = typer.Argument(..., help="Output folder: scans/scene<NNNN>_<NN>/, the label map, the split lists."),
     workers: int = typer.Option(1, "--workers", "-w", min=1, max=MAX_WORKERS,
                                 help="Scenes exported at once (processes); about 10 s per scene each."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON only."),

@@ -31,8 +31,10 @@ import os
 import pickle
 import re
 import stat
+import struct
 import tokenize
 import zipfile
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -343,13 +345,11 @@ def read_npz(path: str | os.PathLike, *, error: type[AssistError] = DataError, k
                 out[k] = a.reshape(shape[::-1]).T if fortran else a.reshape(shape)
     except AssistError:
         raise
-    except (zipfile.BadZipFile, zipfile.LargeZipFile, OSError, EOFError, ValueError, NotImplementedError,
-            RuntimeError) as e:  # zlib.error is an Exception subclass named error: caught below
+    except (zlib.error, struct.error):  # a corrupt compressed member, or a member header cut short
+        raise error(f"{src}: not a readable {what} (corrupt compressed data)") from None
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, OSError, EOFError, ValueError, RuntimeError) as e:
+        # RuntimeError covers an encrypted member and an unsupported compression method
         raise error(f"{src}: not a readable {what} ({type(e).__name__}: {shown(e, 160)})") from None
-    except Exception as e:  # zlib.error (a corrupt compressed member)
-        if type(e).__module__ == "zlib" or type(e).__name__ == "error":
-            raise error(f"{src}: not a readable {what} (corrupt compressed data)") from None
-        raise
     return out
 
 
