@@ -284,28 +284,21 @@ def vertex_normals(coord: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return normals.astype(np.float32)
 
 
-def write_ply(path: str | Path, coord: np.ndarray, color: np.ndarray | None = None, faces: np.ndarray | None = None,
-              *, instance: np.ndarray | None = None) -> None:
-    """Write a binary little-endian PLY (ScanNet's property names: x y z, red green blue alpha) and,
-    with ``instance`` (N,), each vertex's instance id as an ``int instance`` property after them."""
-    n = len(coord)
-    fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")]
-    if color is not None:
-        fields += [("red", "u1"), ("green", "u1"), ("blue", "u1"), ("alpha", "u1")]
-    if instance is not None:
-        fields += [("instance", "<i4")]
-    v = np.zeros(n, dtype=fields)
-    v["x"], v["y"], v["z"] = coord[:, 0], coord[:, 1], coord[:, 2]
-    header = ["ply", "format binary_little_endian 1.0", f"element vertex {n}",
-              "property float x", "property float y", "property float z"]
-    if color is not None:
-        v["red"], v["green"], v["blue"], v["alpha"] = color[:, 0], color[:, 1], color[:, 2], 255
-        header += ["property uchar red", "property uchar green", "property uchar blue", "property uchar alpha"]
-    if instance is not None:
-        if len(instance) != n:
-            raise ValueError(f"instance: {len(instance)} values for {n} vertices")
-        v["instance"] = instance
-        header += ["property int instance"]
+#: PLY type names of the numpy dtypes our writers use
+_PLY_TYPES = {"<f4": "float", "u1": "uchar", "<u2": "ushort", "<i4": "int"}
+
+
+def binary_ply(columns: list[tuple[str, str, np.ndarray | int]], faces: np.ndarray | None = None, *,
+               comment: str | None = None) -> bytes:
+    """A binary little-endian PLY: one vertex property per ``(name, dtype, values)`` column in that order
+    (dtype ``<f4``, ``u1``, ``<u2`` or ``<i4``; a number fills the column), and ``faces`` (F, 3) as
+    ``vertex_indices`` lists when given."""
+    n = len(columns[0][2])
+    v = np.zeros(n, dtype=[(name, t) for name, t, _ in columns])
+    for name, _, values in columns:
+        v[name] = values
+    header = ["ply", "format binary_little_endian 1.0", *([f"comment {comment}"] if comment else []),
+              f"element vertex {n}", *(f"property {_PLY_TYPES[t]} {name}" for name, t, _ in columns)]
     body = v.tobytes()
     if faces is not None:
         header += [f"element face {len(faces)}", "property list uchar int vertex_indices"]
@@ -313,7 +306,29 @@ def write_ply(path: str | Path, coord: np.ndarray, color: np.ndarray | None = No
         f["n"], f["i"] = 3, faces
         body += f.tobytes()
     header.append("end_header")
-    write_bytes_atomic(path, ("\n".join(header) + "\n").encode("ascii") + body)
+    return ("\n".join(header) + "\n").encode("ascii") + body
+
+
+def xyz_rgba_columns(coord: np.ndarray, color: np.ndarray | None) -> list[tuple[str, str, np.ndarray | int]]:
+    """The ``x y z`` and, with ``color``, ``red green blue alpha`` (255) columns of :func:`binary_ply`."""
+    cols: list[tuple[str, str, np.ndarray | int]] = [("x", "<f4", coord[:, 0]), ("y", "<f4", coord[:, 1]),
+                                                     ("z", "<f4", coord[:, 2])]
+    if color is not None:
+        cols += [("red", "u1", color[:, 0]), ("green", "u1", color[:, 1]), ("blue", "u1", color[:, 2]),
+                 ("alpha", "u1", 255)]
+    return cols
+
+
+def write_ply(path: str | Path, coord: np.ndarray, color: np.ndarray | None = None, faces: np.ndarray | None = None,
+              *, instance: np.ndarray | None = None) -> None:
+    """Write a binary little-endian PLY (ScanNet's property names: x y z, red green blue alpha) and,
+    with ``instance`` (N,), each vertex's instance id as an ``int instance`` property after them."""
+    cols = xyz_rgba_columns(coord, color)
+    if instance is not None:
+        if len(instance) != len(coord):
+            raise ValueError(f"instance: {len(instance)} values for {len(coord)} vertices")
+        cols.append(("instance", "<i4", instance))
+    write_bytes_atomic(path, binary_ply(cols, faces))
 
 
 def read_scan_mesh(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -19,12 +19,11 @@ from typing import Callable
 
 import numpy as np
 
-from ..core.errors import DataError
 from ..core.fileio import write_bytes_atomic, write_text_atomic
 from ..core.taxonomy.scannet import SURFACES, scannet_label
 from ..export.labels import surface_codes
-from ..export.manifest import read_manifest, split_of
-from .scannet import scene_with_room
+from ..export.manifest import split_of
+from .scannet import finished_scenes, scene_with_room
 
 __all__ = ["export_s3dis", "s3dis_class", "AREAS"]
 
@@ -53,23 +52,12 @@ def _txt(coord: np.ndarray, color: np.ndarray) -> bytes:
 def export_s3dis(data: str | Path, out: str | Path, *, on_scene: Callable[[str, str], None] | None = None) -> dict:
     """Write every finished scene of dataset ``data`` as an S3DIS room under ``out``. Returns a summary."""
     data, out = Path(data), Path(out)
-    fix = "; give a folder written by 'assist3d generate'"
-    manifest = read_manifest(data, fix=fix)
-    if manifest is None:
-        raise DataError(f"{data}: not an assist3d dataset (no manifest.json){fix}")
-    entries, classes = manifest.get("scenes"), manifest.get("classes")
-    if not isinstance(entries, list) or not isinstance(classes, list) or not entries:
-        raise DataError(f"{data / 'manifest.json'}: no finished scene to export{fix}")
-    if out.resolve() == data.resolve() or data.resolve() in out.resolve().parents:
-        raise DataError(f"{out}: the export must not go inside the dataset folder {data}")
+    classes, todo = finished_scenes(data, out)
     rooms: dict[str, list[str]] = {a: [] for a in AREAS.values()}
-    for e in sorted(entries, key=lambda e: e.get("index", 0) if isinstance(e, dict) else 0):
-        if not (isinstance(e, dict) and isinstance(e.get("id"), str) and isinstance(e.get("index"), int)):
-            raise DataError(f"{data / 'manifest.json'}: a scene entry lacks its 'id' or 'index'{fix}")
-        sid = e["id"]
-        a = scene_with_room(data, sid, list(classes))
+    for index, sid in todo:
+        a = scene_with_room(data, sid, classes)
         height, names = a["height"], a["classes"]
-        area = AREAS[split_of(e["index"])]
+        area = AREAS[split_of(index)]
         anno = out / area / sid / "Annotations"
         anno.mkdir(parents=True, exist_ok=True)
         for old in anno.glob("*.txt"):  # a re-export replaces the room's files

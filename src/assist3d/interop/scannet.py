@@ -40,6 +40,7 @@ from ..core import reading
 from ..core.errors import DataError
 from ..core.fileio import write_bytes_atomic, write_json_atomic, write_text_atomic
 from ..core.taxonomy.scannet import SURFACES, ScanNetLabel, scannet_label, surface_label
+from ..data.ply import binary_ply, xyz_rgba_columns
 from ..export.labels import surface_codes
 from ..export.manifest import read_manifest, split_of
 from ..export.ply import instance_palette
@@ -86,26 +87,36 @@ def _faces(coord: np.ndarray, normal: np.ndarray) -> np.ndarray:
 
 def _ply(coord: np.ndarray, rgb: np.ndarray, faces: np.ndarray, *, normal: np.ndarray | None = None,
          label: np.ndarray | None = None) -> bytes:
-    fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("red", "u1"), ("green", "u1"), ("blue", "u1"),
-              ("alpha", "u1")]
+    cols = xyz_rgba_columns(coord, rgb)
     if normal is not None:
-        fields += [("nx", "<f4"), ("ny", "<f4"), ("nz", "<f4")]
+        cols += [("nx", "<f4", normal[:, 0]), ("ny", "<f4", normal[:, 1]), ("nz", "<f4", normal[:, 2])]
     if label is not None:
-        fields += [("label", "<u2")]
-    v = np.zeros(len(coord), dtype=fields)
-    v["x"], v["y"], v["z"] = coord[:, 0], coord[:, 1], coord[:, 2]
-    v["red"], v["green"], v["blue"], v["alpha"] = rgb[:, 0], rgb[:, 1], rgb[:, 2], 255
-    if normal is not None:
-        v["nx"], v["ny"], v["nz"] = normal[:, 0], normal[:, 1], normal[:, 2]
-    if label is not None:
-        v["label"] = label
-    fa = np.zeros(len(faces), dtype=[("n", "u1"), ("v", "<i4", (3,))])
-    fa["n"], fa["v"] = 3, faces
-    types = {"<f4": "float", "u1": "uchar", "<u2": "ushort"}
-    header = ["ply", "format binary_little_endian 1.0", "comment assist3d export, ScanNet v2 layout",
-              f"element vertex {len(v)}", *(f"property {types[t]} {name}" for name, t in fields),
-              f"element face {len(fa)}", "property list uchar int vertex_indices", "end_header"]
-    return ("\n".join(header) + "\n").encode("ascii") + v.tobytes() + fa.tobytes()
+        cols.append(("label", "<u2", label))
+    return binary_ply(cols, faces, comment="assist3d export, ScanNet v2 layout")
+
+
+def finished_scenes(data: Path, out: Path) -> tuple[list[str], list[tuple[int, str]]]:
+    """The class list and the finished scenes ``(index, id)``, in index order, of dataset ``data`` (its
+    manifest), for an export into ``out``; one-line :class:`DataError` for a folder that is not a dataset,
+    a damaged manifest, no finished scene, or an ``out`` inside the dataset."""
+    fix = "; give a folder written by 'assist3d generate'"
+    manifest = read_manifest(data, fix=fix)
+    if manifest is None:
+        raise DataError(f"{data}: not an assist3d dataset (no manifest.json){fix}")
+    entries = manifest.get("scenes")
+    classes = manifest.get("classes")
+    if not isinstance(entries, list) or not isinstance(classes, list):
+        raise DataError(f"{data / 'manifest.json'}: no 'scenes' or 'classes' list{fix}")
+    todo: list[tuple[int, str]] = []
+    for e in entries:
+        if not (isinstance(e, dict) and isinstance(e.get("id"), str) and isinstance(e.get("index"), int)):
+            raise DataError(f"{data / 'manifest.json'}: a scene entry lacks its 'id' or 'index'{fix}")
+        todo.append((e["index"], e["id"]))
+    if not todo:
+        raise DataError(f"{data}: the dataset has no finished scene to export")
+    if out.resolve() == data.resolve() or data.resolve() in out.resolve().parents:
+        raise DataError(f"{out}: the export must not go inside the dataset folder {data}")
+    return list(classes), sorted(todo)
 
 
 def scene_with_room(data: Path, scene_id: str, classes: list[str]) -> dict:
@@ -189,23 +200,7 @@ def export_scannet(data: str | Path, out: str | Path, *, workers: int = 1,
     ``on_scene(scene_id, name)`` is called after each. Returns a summary (``scenes``, ``splits``,
     ``labels``, ``out``)."""
     data, out = Path(data), Path(out)
-    fix = "; give a folder written by 'assist3d generate'"
-    manifest = read_manifest(data, fix=fix)
-    if manifest is None:
-        raise DataError(f"{data}: not an assist3d dataset (no manifest.json){fix}")
-    entries = manifest.get("scenes")
-    classes = manifest.get("classes")
-    if not isinstance(entries, list) or not isinstance(classes, list):
-        raise DataError(f"{data / 'manifest.json'}: no 'scenes' or 'classes' list{fix}")
-    todo: list[tuple[int, str]] = []
-    for e in entries:
-        if not (isinstance(e, dict) and isinstance(e.get("id"), str) and isinstance(e.get("index"), int)):
-            raise DataError(f"{data / 'manifest.json'}: a scene entry lacks its 'id' or 'index'{fix}")
-        todo.append((e["index"], e["id"]))
-    if not todo:
-        raise DataError(f"{data}: the dataset has no finished scene to export")
-    if out.resolve() == data.resolve() or data.resolve() in out.resolve().parents:
-        raise DataError(f"{out}: the export must not go inside the dataset folder {data}")
+    classes, todo = finished_scenes(data, out)
     names: dict[str, str] = {}
     splits: dict[str, list[str]] = {"train": [], "val": [], "test": []}
     used: dict[str, tuple[ScanNetLabel, int]] = {}

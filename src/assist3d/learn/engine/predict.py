@@ -70,11 +70,18 @@ class ScenePrediction:
     scores: np.ndarray
 
 
-@torch.no_grad()
 def predict_scene(model: torch.nn.Module, sample: PointSample, voxel_size: float, cfg: PredictConfig,
                   device: str = "cpu") -> ScenePrediction:
+    """The model's instances of one scene (:func:`predict_points` on its points and colours)."""
+    return predict_points(model, sample.coord, sample.color, voxel_size, cfg, device)
+
+
+@torch.no_grad()
+def predict_points(model: torch.nn.Module, coord: np.ndarray, color: np.ndarray, voxel_size: float,
+                   cfg: PredictConfig, device: str = "cpu") -> ScenePrediction:
+    """The model's instances of ``coord`` (N, 3) metres with ``color`` (N, 3) uint8: masks over the points."""
     model.eval()
-    vox = voxelize(sample.coord, sample.color, None, voxel_size)
+    vox = voxelize(coord, color, None, voxel_size)
     coords, feats = collate([vox], device)
     final = model(coords, feats, 1)[0][-1]
     logits = final.masks.float()  # (V, Q)

@@ -68,10 +68,5 @@ class BatchLoader(StepLoader[list[Example]]):
             raise ConfigError("no training scenes")
         if probs is not None and len(probs) != len(scenes):
             raise ConfigError(f"{len(probs)} draw probabilities for {len(scenes)} training scenes")
-        super().__init__(partial(_step_batch, list(scenes), cfg, seed, probs), start, workers=workers,
+        super().__init__(partial(build_batch, list(scenes), cfg, seed, probs=probs), start, workers=workers,
                          prefetch=prefetch)
-
-
-def _step_batch(scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int, probs: np.ndarray | None,
-                step: int) -> list[Example]:
-    return build_batch(scenes, cfg, seed, step, probs)

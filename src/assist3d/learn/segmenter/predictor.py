@@ -42,10 +42,9 @@ from ...core.paths import safe_name
 from ...core.registry import Registry
 from ...export.segmentation import instance_colors, write_top_view
 from ..engine.voxelize import VoxelGridError
-from ...core.contracts import PointSample
 from ..checkpoint import read_checkpoint
 from ..engine.config import TrainConfig
-from ..engine.predict import LoadedMask3D, mask3d_from_checkpoint, predict_scene
+from ..engine.predict import LoadedMask3D, mask3d_from_checkpoint, predict_points
 from .checkpoint import LoadedSegmenter, load_segmenters, segmenter_from_checkpoint
 from .config import SegmenterConfig
 from .features import UNITS, to_segmenter_frame
@@ -76,9 +75,7 @@ def _mask3d_instances(model, cfg: TrainConfig, coord: np.ndarray, color: np.ndar
         raise DataError("test-time augmentation (segment --tta) is for the CPU segmenter, not a mask3d model")
     n = len(coord)
     rgb = np.asarray(color, np.uint8) if color is not None else np.zeros((n, 3), np.uint8)
-    sample = PointSample(scene_id="scan", coord=coord, color=rgb, normal=np.zeros((n, 3), np.float32),
-                         instance=np.full(n, -1, np.int32), segment=np.full(n, -1, np.int32), valid=np.ones(n, bool))
-    pred = predict_scene(model, sample, cfg.data.voxel_size, cfg.predict, next(model.parameters()).device.type)
+    pred = predict_points(model, coord, rgb, cfg.data.voxel_size, cfg.predict, next(model.parameters()).device.type)
     labels = np.full(n, -1, np.int64)
     for i in range(len(pred.scores) - 1, -1, -1):  # the best-scoring mask names a point held by several
         labels[pred.masks[i]] = i
