@@ -58,6 +58,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+from assist3d.learn.segmenter.shipped import SHIPPED_NAME
+
 ROOT = Path(__file__).resolve().parents[1]
 CLASSES = ("clear", "traceback", "silent", "unclear", "hang", "loss")
 OPERATORS = ("truncate", "flip", "encoding", "inflate", "nest")
@@ -72,7 +74,7 @@ TINY_GEN = {
 }
 SCAN_POINTS = 3000
 REAL_SCAN = ROOT.parent / "shared" / "data" / "real" / "scannet_scene0451_01.npy"
-CHECKPOINT = ROOT / "src" / "assist3d" / "resources" / "models" / "segmenter-v1.pt"
+CHECKPOINT = ROOT / "src" / "assist3d" / "resources" / "models" / SHIPPED_NAME
 
 
 # ------------------------------------------------------------------------------------------------

@@ -83,6 +83,7 @@ def test_one_predictor_runs_either_model_from_its_checkpoint(tmp_path):
     assert ((seg.labels >= 0) == held).all()
     with pytest.raises(DataError, match="'hybrid' works on the outputs of a segmenter model, not a mask3d model: use "
                                         "--method learned"):
-        Predictor.load(tmp_path / "run" / "last.pt")
+        Predictor.load(tmp_path / "run" / "last.pt", method="hybrid")
+    assert Predictor.load(tmp_path / "run" / "last.pt").method == "learned"  # the default step runs either model
     with pytest.raises(DataError, match="--tta"):
         Predictor.load(tmp_path / "run" / "last.pt", method="learned", tta=True)

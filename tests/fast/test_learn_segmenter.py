@@ -840,17 +840,37 @@ def test_shipped_model_segments_the_real_scan_and_beats_the_geometric_reference(
     from assist3d.learn.segmenter.shipped import shipped_model_path
 
     path = shipped_model_path()
-    assert path.stat().st_size <= 5 * 1024 * 1024
+    assert path.stat().st_size <= 20 * 1024 * 1024  # issue 51: at most 20 MB in the package
     loaded = load_segmenter(path)
     assert loaded.meta.get("train_data") == "generated only"
     s = open_dataset(f"array:{real_scan_path}")[0]
-    t0 = time.perf_counter()
-    seg = segment_points(loaded.model, loaded.config, s.coord, s.color)
-    assert time.perf_counter() - t0 < 30
+    # issue 51's bound (< 15 s on CPU for the 107,046-point scan, twice the 50k points it names), on the
+    # process's CPU time with one torch thread: at least the wall time an idle machine takes, and unlike
+    # wall time it does not grow when another job shares the cores
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        t0 = time.process_time()
+        seg = segment_points(loaded.model, loaded.config, s.coord, s.color)
+        assert time.process_time() - t0 < 15
+    finally:
+        torch.set_num_threads(threads)
     learned = summarize([match_scene(s.instance, seg.masks, seg.scores, valid=s.valid)])
     geo = segment_geometric(s.coord)
     reference = summarize([match_scene(s.instance, geo.masks, geo.scores, valid=s.valid)])
     assert learned["AP50"] > reference["AP50"], (learned.summary, reference.summary)
+
+
+def test_segment_default_step_is_the_predictors():
+    """`assist3d segment` with no --method runs the library's default step (the network alone)."""
+    import inspect
+
+    from assist3d.cli.segment import segment_cmd
+    from assist3d.learn.segmenter.predictor import DEFAULT_METHOD, STEPS, Predictor
+
+    assert DEFAULT_METHOD == "learned" and DEFAULT_METHOD in STEPS.names()
+    assert inspect.signature(segment_cmd).parameters["method"].default.default == DEFAULT_METHOD
+    assert inspect.signature(Predictor.load).parameters["method"].default == DEFAULT_METHOD
 
 
 @pytest.mark.slow

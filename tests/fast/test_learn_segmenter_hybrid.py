@@ -210,7 +210,10 @@ def test_hybrid_on_a_toy_room_returns_ranked_consistent_masks_and_finds_the_boxe
 
 
 @pytest.mark.slow
-def test_shipped_model_hybrid_beats_learned_alone_and_the_reference_on_the_real_scan(real_scan_path):
+def test_shipped_model_hybrid_beats_the_reference_on_the_real_scan(real_scan_path):
+    """Hybrid inference (segment --method hybrid) keeps its time bound and stays ahead of the geometric
+    reference it builds on. It no longer beats the network alone here: with the 2,000-step model the
+    network alone became segment's default (docs/results.md)."""
     import time
 
     from assist3d.learn.segmenter.infer import segment_points
@@ -235,4 +238,4 @@ def test_shipped_model_hybrid_beats_learned_alone_and_the_reference_on_the_real_
     geo = segment_geometric(s.coord)
     ap50 = {name: summarize([match_scene(s.instance, x.masks, x.scores, valid=s.valid)])["AP50"]
             for name, x in (("hybrid", hybrid), ("learned", learned), ("geometric", geo))}
-    assert ap50["hybrid"] > max(ap50["learned"], ap50["geometric"]), ap50
+    assert ap50["hybrid"] > ap50["geometric"], ap50

@@ -112,8 +112,8 @@ def probe_cmd(
                                             "(same batches for any number; 1 helps on 2 cores, more on a GPU machine)"),
     jobs: int = typer.Option(1, "--jobs", min=1, max=64, help="train up to N seeds at once, each in its own "
                              "process (for a GPU machine; each process loads its own copy of the training scenes)"),
-    hybrid: bool = typer.Option(False, "--hybrid", help="also score hybrid inference (the default of `assist3d "
-                                "segment`) with every seed's model: JSON key 'hybrid' (runs, mean, std); adds "
+    hybrid: bool = typer.Option(False, "--hybrid", help="also score hybrid inference (`assist3d segment "
+                                "--method hybrid`) with every seed's model: JSON key 'hybrid' (runs, mean, std); adds "
                                 "it to a finished folder without retraining"),
 ) -> None:
     """Train the CPU segmenter on TRAIN for a fixed budget, segment EVAL zero-shot, print AP/AP50/AP25/AR
@@ -204,9 +204,9 @@ def segment_cmd(
                              "(points coloured by instance, with an 'instance' vertex property)"),
     checkpoint: Optional[list[Path]] = typer.Option(None, "--checkpoint", help="a trained segmenter (default: the shipped "
                                                     "model); repeat it to average several models' outputs (an ensemble)"),
-    method: str = typer.Option("hybrid", "--method", help="hybrid (the model's instances and the geometric components, "
-                               "ranked by the model, fallback proposals below them, snapped to superpoints), "
-                               "learned (the model's instances only) or "
+    method: str = typer.Option("learned", "--method", help="learned (the model's instances, the default), "
+                               "hybrid (the model's instances and the geometric components, ranked by the model, "
+                               "fallback proposals below them, snapped to superpoints) or "
                                "geometric (planes removed, connected components; no model)"),
     tta: bool = typer.Option(False, "--tta", help="average the network over 8 turned and mirrored copies of the scan "
                              "(8x the network's time; measured in experiments/fidelity-log.md, off by default)"),

@@ -1,4 +1,4 @@
-"""Hybrid inference, the default of ``assist3d segment``: the network's instances plus the geometric
+"""Hybrid inference, ``assist3d segment --method hybrid``: the network's instances plus the geometric
 reference's components, both ranked by the network, fallback proposals ranked below them, then
 snapped to superpoints.
 

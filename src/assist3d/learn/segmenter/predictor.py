@@ -95,6 +95,10 @@ STEPS.add("learned", Step(_network_instances, models=frozenset({"segmenter", "ma
 STEPS.add("geometric", Step(lambda model, cfg, coord, color, *, tta=False: segment_geometric(coord), needs_model=False,
                             models=frozenset()))
 
+#: ``segment``'s step when none is named: the network's instances alone, chosen over hybrid by the rule
+#: written before the scaling runs (docs/results.md, "The shipped model and segment's default")
+DEFAULT_METHOD = "learned"
+
 
 def usable_points(where: str, scene_id: str, coord: np.ndarray, units: str = "m") -> np.ndarray:
     """(N,) bool: the points to segment, those with finite coordinates within ``MAX_COORD_M`` metres
@@ -143,7 +147,7 @@ class ScanSegmentation(Segmentation):
 class Predictor:
     """A segmenter (or none, for the geometric step) and the post-processing step that runs after it."""
 
-    def __init__(self, loaded: LoadedSegmenter | LoadedMask3D | None, method: str = "hybrid", *, tta: bool = False,
+    def __init__(self, loaded: LoadedSegmenter | LoadedMask3D | None, method: str = DEFAULT_METHOD, *, tta: bool = False,
                  device: str = "cpu") -> None:
         self.step = STEPS.get(method)
         self.method = method
@@ -162,7 +166,7 @@ class Predictor:
         self.device = device
 
     @classmethod
-    def load(cls, checkpoints: str | Path | Sequence[str | Path] | None = None, *, method: str = "hybrid",
+    def load(cls, checkpoints: str | Path | Sequence[str | Path] | None = None, *, method: str = DEFAULT_METHOD,
              tta: bool = False, device: str = "cpu") -> "Predictor":
         """The model in ``checkpoints`` (several files: an ensemble; None: the shipped model), or no
         model for a step that needs none."""

@@ -15,7 +15,7 @@ Output folder (resumable; a finished seed is never redone, an unfinished one res
 
 The figures of ``runs``/``mean``/``std`` score the network's instances alone: the probe measures
 training data, and the geometric proposals of hybrid inference do not depend on it. ``hybrid=True``
-also scores what ``assist3d segment`` does by default (``hybrid.py``) with every seed's model, under
+also scores what ``assist3d segment --method hybrid`` does (``hybrid.py``) with every seed's model, under
 the key ``hybrid`` (its own ``runs``/``mean``/``std``); it is an evaluation option, not part of the
 request, so it can be added to a finished folder without retraining. Each seed's hybrid figures
 record the inference settings that made them (``inference``: the hybrid, geometric and superpoint
@@ -68,7 +68,7 @@ METHODS: tuple[str, ...] = ("learned", "hybrid", "geometric")
 
 
 def hybrid_settings() -> dict:
-    """The settings of hybrid inference as ``segment`` runs it today (stored with hybrid figures)."""
+    """The settings of hybrid inference as ``segment --method hybrid`` runs it today (stored with hybrid figures)."""
     return json.loads(json.dumps({"hybrid": asdict(HybridConfig()), "geometric": asdict(HYBRID_GEOMETRIC),
                                   "superpoint": asdict(SuperpointConfig())}))
 
