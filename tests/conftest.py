@@ -63,3 +63,15 @@ def load_script() -> Callable[[str], ModuleType]:
         return module
 
     return load
+
+
+@pytest.fixture
+def one_thread():
+    """Torch on one CPU thread for the test: multi-threaded CPU reductions (index_add_, matmul) are not
+    bit-reproducible, and a time bound on process CPU time only holds without OpenMP workers spinning
+    on busy cores (52 CPU s for a 7 s job once, with another job beside the tests)."""
+    torch = pytest.importorskip("torch")
+    old = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(old)

@@ -56,6 +56,7 @@ def test_both_trainers_write_the_format_and_the_mask3d_file_of_before_still_read
         read_checkpoint(tmp_path / "missing.pt")
 
 
+@pytest.mark.slow  # trains a Mask3D-style model for an epoch
 def test_one_predictor_runs_either_model_from_its_checkpoint(tmp_path):
     """``Predictor.load`` reads the model a checkpoint names: a Mask3D-style file gives the model's own
     instances, the same masks as the model's predict_scene, and refuses segmenter-only steps by name."""

@@ -202,15 +202,6 @@ def test_loss_falls_over_a_few_steps_on_two_generated_scenes(tiny_scenes, tmp_pa
     assert after < 0.8 * before, (before, after)
 
 
-@pytest.fixture
-def one_thread():
-    # multi-threaded CPU reductions (index_add_, matmul) are not bit-reproducible; one thread is
-    old = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(old)
-
-
 @pytest.mark.slow
 def test_resumed_training_equals_an_uninterrupted_run(tiny_scenes, tmp_path, monkeypatch, one_thread):
     cfg = parse_segmenter_config(TINY_NET)
@@ -834,7 +825,7 @@ SHARED_SCAN = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "
 
 
 @pytest.mark.slow
-def test_shipped_model_segments_the_real_scan_and_beats_the_geometric_reference(real_scan_path):
+def test_shipped_model_segments_the_real_scan_and_beats_the_geometric_reference(real_scan_path, one_thread):
     import time
 
     from assist3d.learn.segmenter.shipped import shipped_model_path
@@ -847,14 +838,9 @@ def test_shipped_model_segments_the_real_scan_and_beats_the_geometric_reference(
     # issue 51's bound (< 15 s on CPU for the 107,046-point scan, twice the 50k points it names), on the
     # process's CPU time with one torch thread: at least the wall time an idle machine takes, and unlike
     # wall time it does not grow when another job shares the cores
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        t0 = time.process_time()
-        seg = segment_points(loaded.model, loaded.config, s.coord, s.color)
-        assert time.process_time() - t0 < 15
-    finally:
-        torch.set_num_threads(threads)
+    t0 = time.process_time()
+    seg = segment_points(loaded.model, loaded.config, s.coord, s.color)
+    assert time.process_time() - t0 < 15
     learned = summarize([match_scene(s.instance, seg.masks, seg.scores, valid=s.valid)])
     geo = segment_geometric(s.coord)
     reference = summarize([match_scene(s.instance, geo.masks, geo.scores, valid=s.valid)])

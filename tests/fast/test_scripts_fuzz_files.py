@@ -39,6 +39,7 @@ def _not_clear(outcomes) -> list[str]:
             if o.cls != "clear"]
 
 
+@pytest.mark.slow  # its fixture builds the examples in a subprocess
 def test_the_same_seed_gives_the_same_cases(fuzz, tmp_path):
     module, examples = fuzz
     ts = module.targets(examples)
@@ -57,6 +58,7 @@ def test_the_same_seed_gives_the_same_cases(fuzz, tmp_path):
     assert {(p.target.name, p.operator) for p in plans} == {(t.name, op) for t in ts for op in module.OPERATORS}
 
 
+@pytest.mark.slow  # its fixture builds the examples in a subprocess
 def test_a_seeded_slice_of_damaged_files_ends_clear(fuzz):
     """One case of every target (the operators taking turns, seed 1) and the families of issue 54 (a
     config in Latin-1, a config nested 5,000 levels, a manifest.json nested 100,000 levels): every
