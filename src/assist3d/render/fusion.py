@@ -99,7 +99,8 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
     cam_dirs = pixel_directions(c0.width, c0.height, c0.fx, c0.fy, c0.cx, c0.cy).astype(np.float32)
     grid = scene_grid(scene, cfg.voxel_size)
     n_ids = int(scene.face_instance.max(initial=-1)) + 2  # slot 0 = background, slot i + 1 = instance i
-    inst_shift = (scene.face_instance + 1).astype(np.int32)  # background -> 0
+    # per triangle its count slot (background -> 0); one more slot at the end, which face -1 (a miss) indexes
+    inst_of_face = np.append((scene.face_instance + 1).astype(np.int32), np.int32(n_ids))
     salts = rng.integers(1, 2**62, size=len(cameras) + 1)
     sensor_seeds = rng.integers(0, 2**63, size=len(cameras))
     realism = sensor_enabled(cfg)
@@ -122,18 +123,22 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
                                          rng=np.random.default_rng(int(sensor_seeds[i])))
         extra = None if sink is None else sink.view(i, cam, t, face, dirs)
         pix = np.flatnonzero(face >= 0)
-        fh = face[pix]
-        counts = np.bincount(inst_shift[fh], minlength=n_ids)
-        tp = t[pix]
-        pts = np.zeros((len(pix), 3), np.float32)
-        for j in range(3):  # column by column: (N, 3) broadcasts are slow
-            col = dirs[:, j][pix]
+        counts = np.bincount(np.take(inst_of_face, face), minlength=n_ids + 1)[:n_ids]  # a miss (-1) -> slot n_ids
+        tp = np.take(t, pix)
+        # the hit points column by column ((N, 3) broadcasts are slow), keyed as they come (the same
+        # float32 operations as grid.keys on the (N, 3) points); only the kept rows are gathered
+        cols = []
+        for j in range(3):
+            col = np.take(dirs[:, j], pix)
             col *= tp
             col += center[j]
-            pts[:, j] = col
-        keys = grid.keys(pts)
+            cols.append(col)
+        keys = grid.keys_of_columns(cols)
         keep = pick_one_per_voxel_scan(keys, int(salts[i]))
-        return keys[keep], pts[keep], fh[keep], counts, len(pix), extra, n_cast
+        pts = np.empty((len(keep), 3), np.float32)
+        for j in range(3):
+            np.take(cols[j], keep, out=pts[:, j])
+        return np.take(keys, keep), pts, np.take(face, np.take(pix, keep)), counts, len(pix), extra, n_cast
 
     def run(pool: ThreadPoolExecutor | None) -> list[tuple]:
         out = []

@@ -42,11 +42,15 @@ class VoxelGrid:
         """(N,) int64 linear voxel index of points (N, 3) float32; points outside are clamped to
         the border. Computed column by column (1-d loops are several times faster than (N, 3)
         broadcasts)."""
+        return self.keys_of_columns([points[:, 0], points[:, 1], points[:, 2]])
+
+    def keys_of_columns(self, columns: list[np.ndarray]) -> np.ndarray:
+        """:meth:`keys` of the points whose x, y and z are ``columns`` (three (N,) float32 arrays)."""
         inv = np.float32(1.0 / self.size)
         half = np.float32(0.5)
-        key = np.zeros(len(points), np.int64)
+        key = np.zeros(len(columns[0]), np.int64)
         for j in range(3):
-            q = points[:, j] * inv
+            q = columns[j] * inv
             q += half
             np.floor(q, out=q)
             ij = q.astype(np.int64)
