@@ -25,7 +25,7 @@ import shutil
 import statistics
 from pathlib import Path
 
-from assist3d.bench.evaluation.compare import recipe_comparison
+from assist3d.bench.evaluation.compare import recipe_comparison, room_means
 
 HERE = Path(__file__).resolve().parent
 ARMS = ("real", "synth", "mix-assist3d", "mix-randomrooms")
@@ -37,9 +37,10 @@ PAIRS = (("mix-assist3d", "real"), ("mix-assist3d", "synth"), ("mix-assist3d", "
          ("synth", "real"), ("mix-randomrooms", "real"))
 
 
-def copy_from(out: Path, scaling: Path | None) -> None:
+def copy_from(out: Path | None, scaling: Path | None) -> None:
     dest = HERE / "per_seed"
-    for res in sorted(out.glob("*/*/seed_*/result.json")) + sorted(out.glob("synth/seed_*/result.json")):
+    runs = [] if out is None else sorted(out.glob("*/*/seed_*/result.json")) + sorted(out.glob("synth/seed_*/result.json"))
+    for res in runs:
         rel = res.relative_to(out)
         name = "-".join(rel.parts[:-1]) + ".json"  # e.g. real-scene0006-seed_0.json, synth-seed_2.json
         if not (dest / name).exists():
@@ -74,17 +75,12 @@ def load() -> dict[str, dict[int, dict[str, float]]]:
     return arms
 
 
-def room_means(scans: dict[str, float]) -> dict[str, float]:
-    return {r: statistics.fmean(v for s, v in scans.items() if s.startswith(r)) for r in ROOMS}
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--copy", type=Path, help="run.sh's OUT folder to copy finished seeds from")
     ap.add_argument("--scaling-run", type=Path, help="the scaling study's run folder (synth seeds 0 and 1)")
     a = ap.parse_args()
-    if a.copy or a.scaling_run:
-        copy_from(a.copy or Path("/nonexistent"), a.scaling_run)
+    copy_from(a.copy, a.scaling_run)
     arms = load()
     stats = {}
     print("| arm | seeds | " + " | ".join(ROOMS) + " | 5-room mean ± seed spread (per seed) |")
