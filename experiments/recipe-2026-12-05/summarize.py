@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import shutil
 import statistics
 from pathlib import Path
 
@@ -102,7 +101,7 @@ def main() -> None:
         if x not in stats or y not in stats:
             print(f"- {LABEL[x]} against {LABEL[y]}: not both run yet")
             continue
-        (rx, mx, sx), (ry, my, sy) = stats[x], stats[y]
+        (rx, _, sx), (ry, _, sy) = stats[x], stats[y]
         diff = {r: rx[r] - ry[r] for r in ROOMS}
         mean_diff = statistics.fmean(diff.values())
         ahead = sum(d > 0 for d in diff.values())
