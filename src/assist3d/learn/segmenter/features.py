@@ -126,19 +126,81 @@ def neighbourhood_scatter(centres: np.ndarray, k: int, tree: cKDTree | None = No
     return np.einsum("vki,vkj->vij", nb, nb)
 
 
+#: a neighbourhood whose two smallest eigenvalues are closer than this (relative to the largest) is
+#: (nearly) degenerate: its normal is not fixed by the closed form, so LAPACK decides it as before
+_DEGENERATE = 1e-6
+
+
+def _scatter_entries(centres: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The six entries ``xx, yy, zz, xy, xz, yz`` ((V,) float64 each) of the mean-centred scatter
+    matrix of each row's neighbours ``idx`` (V, k), divided by k: per axis one gather, no (V, k, 3)
+    array and no batched 3 x 3 products."""
+    k = idx.shape[1]
+    d = []
+    for a in range(3):
+        x = np.ascontiguousarray(centres[:, a])[idx]  # (V, k)
+        x -= x.mean(1, keepdims=True)
+        d.append(x)
+    x, y, z = d
+    return tuple(np.einsum("ij,ij->i", p, q) / k for p, q in ((x, x), (y, y), (z, z), (x, y), (x, z), (y, z)))
+
+
+def _eigen_sym3(xx: np.ndarray, yy: np.ndarray, zz: np.ndarray, xy: np.ndarray, xz: np.ndarray,
+                yz: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Eigenvalues ``(w0 <= w1 <= w2)`` of the symmetric 3 x 3 matrices given by their six entries, and
+    the unit eigenvector ``(nx, ny, nz)`` of ``w0``, in closed form (float64): the eigenvalues by the
+    trigonometric solution of the characteristic cubic, the eigenvector as the longest cross product
+    of two rows of ``A - w0 I``. Valid where ``w0`` is a simple eigenvalue (see :data:`_DEGENERATE`)."""
+    q = (xx + yy + zz) / 3.0
+    a, b, c = xx - q, yy - q, zz - q
+    p = np.sqrt((a * a + b * b + c * c + 2.0 * (xy * xy + xz * xz + yz * yz)) / 6.0)
+    det = a * (b * c - yz * yz) - xy * (xy * c - yz * xz) + xz * (xy * yz - b * xz)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.where(p > 0, det / (2.0 * p ** 3), 0.0)
+    phi = np.arccos(np.clip(r, -1.0, 1.0)) / 3.0
+    w2 = q + 2.0 * p * np.cos(phi)
+    w0 = q + 2.0 * p * np.cos(phi + 2.0 * np.pi / 3.0)
+    w1 = 3.0 * q - w2 - w0
+    r0 = np.stack([xx - w0, xy, xz], 1)
+    r1 = np.stack([xy, yy - w0, yz], 1)
+    r2 = np.stack([xz, yz, zz - w0], 1)
+    cands = np.stack([np.cross(r0, r1), np.cross(r0, r2), np.cross(r1, r2)], 1)  # (V, 3, 3)
+    norm2 = np.einsum("vcj,vcj->vc", cands, cands)
+    best = norm2.argmax(1)
+    rows = np.arange(len(q))
+    vec = cands[rows, best] / np.sqrt(np.maximum(norm2[rows, best], 1e-300))[:, None]
+    return w0, w1, w2, vec[:, 0], vec[:, 1], vec[:, 2]
+
+
 def shape_features(centres: np.ndarray, k: int = 12) -> np.ndarray:
-    """``(V, 4)`` float32: |n_z|, linearity, planarity, scattering of each voxel's ``k`` nearest centres."""
+    """``(V, 4)`` float32: |n_z|, linearity, planarity, scattering of each voxel's ``k`` nearest centres.
+
+    The PCA of each neighbourhood is solved in closed form (:func:`_eigen_sym3`), which is several
+    times faster than a batched LAPACK call and agrees with it to about 1e-8; neighbourhoods whose
+    normal the closed form cannot fix (two equal smallest eigenvalues, e.g. voxels on a line) are
+    solved by ``numpy.linalg.eigh`` exactly as before, so they get the same normal."""
     v = len(centres)
     out = np.zeros((v, 4), np.float32)
     if v < 3:
         return out
-    w, vec = np.linalg.eigh(neighbourhood_scatter(centres, k) / min(k, v))  # ascending eigenvalues
-    w = np.maximum(w, 0.0)
-    l1 = np.maximum(w[:, 2], 1e-12)
-    out[:, 0] = np.abs(vec[:, 2, 0])  # z component of the smallest eigenvector
-    out[:, 1] = (w[:, 2] - w[:, 1]) / l1
-    out[:, 2] = (w[:, 1] - w[:, 0]) / l1
-    out[:, 3] = w[:, 0] / l1
+    kk = min(k, v)
+    _, idx = cKDTree(centres).query(centres, k=kk, workers=-1)
+    idx = idx.reshape(v, kk)
+    w0, w1, w2, _, _, nz = _eigen_sym3(*_scatter_entries(centres, idx))
+    nz = np.abs(nz)
+    odd = np.flatnonzero(~(w1 - w0 > _DEGENERATE * np.maximum(w2, 0.0)))  # NaN-safe
+    if len(odd):  # the same computation as before for these rows: the same eigenvectors
+        nb = centres[idx[odd]]
+        nb = nb - nb.mean(1, keepdims=True)
+        w, vec = np.linalg.eigh(np.einsum("vki,vkj->vij", nb, nb) / kk)
+        w0[odd], w1[odd], w2[odd] = w[:, 0], w[:, 1], w[:, 2]
+        nz[odd] = np.abs(vec[:, 2, 0])
+    w0, w1, w2 = np.maximum(w0, 0.0), np.maximum(w1, 0.0), np.maximum(w2, 0.0)
+    l1 = np.maximum(w2, 1e-12)
+    out[:, 0] = nz
+    out[:, 1] = (w2 - w1) / l1
+    out[:, 2] = (w1 - w0) / l1
+    out[:, 3] = w0 / l1
     return out
 
 
