@@ -111,3 +111,19 @@ def test_manifest_of_an_older_version_stays_resumable(tmp_path):
     cfg["render"]["point_source"] = "tsdf"
     with pytest.raises(DataError, match="config.render"):
         Manifest(tmp_path, cfg, 0, ("chair",), "proc").check_compatible()
+
+
+def test_manifest_from_before_the_ray_budget_resumes_only_with_the_full_render(tmp_path):
+    """render.rays became 'adaptive' by default: a dataset whose config lacks the key was rendered
+    with every ray, so resuming it with today's default would mix two renders and is refused."""
+    from assist3d.config import GenerateConfig, config_to_dict
+
+    cfg = config_to_dict(GenerateConfig())
+    assert cfg["render"]["rays"] == "adaptive"
+    old = json.loads(json.dumps(cfg))
+    del old["render"]["rays"], old["render"]["ray_tile"]
+    Manifest(tmp_path, old, 0, ("chair",), "proc").write()
+    with pytest.raises(DataError, match="config.render"):
+        Manifest(tmp_path, cfg, 0, ("chair",), "proc").check_compatible()
+    cfg["render"]["rays"] = "full"
+    Manifest(tmp_path, cfg, 0, ("chair",), "proc").check_compatible()

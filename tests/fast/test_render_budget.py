@@ -10,7 +10,7 @@ from pydantic import ValidationError
 from assist3d.config import RenderConfig
 from assist3d.core.contracts import Room
 from assist3d.render import make_caster, render_point_cloud, vantage_cameras
-from assist3d.render.budget import cast_adaptive, face_planes, lattice, slender_parts
+from assist3d.render.budget import cast_adaptive, face_planes, lattice, sky_box, slender_parts
 from assist3d.render.camera import pixel_directions, rotate_directions
 from assist3d.render.fusion import scene_grid
 from assist3d.render.shapes import box_part, combine_parts, shell_parts, sphere_part
@@ -52,11 +52,14 @@ def test_lattice_nests_and_ends_on_the_last_pixel():
             assert np.isin(a, b).all()
 
 
-def test_adaptive_views_equal_the_full_views_from_fewer_rays(scene):
+def _adaptive_against_full(scene, sky: bool) -> tuple[int, int]:
+    """Every view of the small scene cast adaptively (with or without the sky box) against the full
+    render: the same pixels; returns (rays cast, pixels)."""
     room, mesh = scene
     cfg = RenderConfig(**SMALL)
     caster = make_caster("embree", mesh.vertices, mesh.faces)
-    planes = face_planes(mesh)
+    sky_caster = make_caster("embree", *sky_box(mesh)) if sky else None
+    planes = face_planes(mesh, sky=sky)
     cams = _views(scene, cfg)
     c0 = cams[0]
     cam_dirs = pixel_directions(c0.width, c0.height, c0.fx, c0.fy, c0.cx, c0.cy).astype(np.float32)
@@ -66,10 +69,11 @@ def test_adaptive_views_equal_the_full_views_from_fewer_rays(scene):
         origins = np.zeros_like(dirs)
         origins[:] = cam.pose[:3, 3].astype(np.float32)
         t_ref, f_ref = caster.cast(origins, dirs)
-        t, f, n = cast_adaptive(caster, planes, cam, dirs, 8)
+        t, f, n = cast_adaptive(caster, planes, cam, dirs, 8, sky_caster)
         # the same pixels: the same triangle and depth (to rounding), but for the odd pixel where a
-        # corner of a box pokes into a tile without touching its corner rays
+        # corner of a box pokes into a tile without touching its corner rays; sky is a miss
         np.testing.assert_array_equal(f >= 0, f_ref >= 0)
+        assert f.max() < len(mesh.faces)
         same = f == f_ref
         assert np.count_nonzero(~same) <= 2
         hit = same & (f_ref >= 0)
@@ -77,7 +81,32 @@ def test_adaptive_views_equal_the_full_views_from_fewer_rays(scene):
         assert np.all(np.isinf(t[f < 0]))
         cast += n
         pixels += len(f)
+    return cast, pixels
+
+
+def test_adaptive_views_equal_the_full_views_from_fewer_rays(scene):
+    cast, pixels = _adaptive_against_full(scene, sky=False)
     assert cast < 0.6 * pixels  # a plain room: most tiles are flat
+    # the room has no ceiling: without the sky box every ray into the open is cast, with it most are not
+    cast_sky, _ = _adaptive_against_full(scene, sky=True)
+    assert cast_sky < 0.9 * cast
+
+
+def test_sky_box_encloses_the_scene(scene):
+    _, mesh = scene
+    box, f = sky_box(mesh)
+    assert box.shape == (8, 3) and f.shape == (12, 3) and set(np.unique(f)) == set(range(8))
+    np.testing.assert_allclose(box.min(0), mesh.vertices.min(0) - 1.0, atol=1e-5)
+    np.testing.assert_allclose(box.max(0), mesh.vertices.max(0) + 1.0, atol=1e-5)
+    # its 12 triangles cover the 6 faces: every ray from inside hits the box
+    from assist3d.render.raycast import NumpyCaster
+    rays = np.random.default_rng(0).normal(size=(200, 3)).astype(np.float32)
+    centre = np.repeat(mesh.vertices.mean(0, keepdims=True), 200, 0).astype(np.float32)
+    _, hit = NumpyCaster(box, f).cast(centre, rays)
+    assert np.all(hit >= 0)
+    planes = face_planes(mesh, sky=True)
+    assert planes.scene_faces == len(mesh.faces) and len(planes.offset) == len(mesh.faces) + 12
+    assert np.all(planes.bar_of_face[len(mesh.faces):] == -1)
 
 
 def test_slender_parts_are_found_and_keep_their_pixels(scene):
@@ -116,7 +145,7 @@ def test_slender_parts_are_found_and_keep_their_pixels(scene):
 def test_adaptive_cloud_covers_the_full_cloud(scene):
     """Coverage and label agreement on a small scene (docs/generation.md, 'Ray budget')."""
     room, mesh = scene
-    full = render_point_cloud(mesh, room, RenderConfig(**SMALL), rng=np.random.default_rng(7))
+    full = render_point_cloud(mesh, room, RenderConfig(**SMALL, rays="full"), rng=np.random.default_rng(7))
     fast = render_point_cloud(mesh, room, RenderConfig(**SMALL, rays="adaptive"), rng=np.random.default_rng(7))
     grid = scene_grid(mesh, 0.02)
     kr, kf = grid.keys(full.sample.coord), grid.keys(fast.sample.coord)

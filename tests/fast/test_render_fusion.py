@@ -11,7 +11,9 @@ from assist3d.render import build_point_cloud, make_caster, render_point_cloud, 
 from assist3d.render.fusion import scene_grid
 from assist3d.render.shapes import box_part, combine_parts, shell_parts, sphere_part
 
-SMALL = dict(width=96, height=72, fx=86.7, fy=86.7, vantage_points=3, views_per_point=8, vantage_clearance=0.25)
+# the reference render (one ray per pixel); the default ray budget is checked against it in test_render_budget.py
+SMALL = dict(width=96, height=72, fx=86.7, fy=86.7, vantage_points=3, views_per_point=8, vantage_clearance=0.25,
+             rays="full")
 
 
 def scene_with_hidden_box():
@@ -65,6 +67,18 @@ def test_labels_are_exact_and_segments_follow_instances(scene, rendered):
     assert set(np.unique(s.instance)) == {-1, 1, 2, 3, 4, 6}  # 5 is sealed away
     seg_of = {1: 0, 2: 1, 3: 0, 4: 2, 6: 1, -1: -1}
     assert all(seg_of[i] == g for i, g in zip(s.instance.tolist()[::97], s.segment.tolist()[::97]))
+
+
+def test_labels_of_the_default_ray_budget_pass_the_check(scene):
+    """The default render (render.rays = adaptive) fills flat tiles from their triangle's plane: its
+    labels pass the label check (re-cast rays, the generator's --verify) all but a few points."""
+    room, mesh = scene
+    assert RenderConfig().rays == "adaptive"
+    res = render_point_cloud(mesh, room, RenderConfig(**(SMALL | {"rays": "adaptive"})), rng=np.random.default_rng(7),
+                             scene_id="t")
+    check = verify_labels(mesh, make_caster("embree", mesh.vertices, mesh.faces), res.sample, res.centers,
+                          pixel_counts=res.pixel_counts)
+    assert check.checked == len(res.sample) and check.ok(min_agreement=0.9995)
 
 
 def test_verify_catches_wrong_labels(scene, rendered):

@@ -93,13 +93,20 @@ def register(app: typer.Typer) -> None:
         ray_address: Optional[str] = typer.Option(None, "--ray-address", help="Ray cluster HOST:PORT or "
                                                   "ray://HOST:PORT (default: Ray's discovery, else a new local "
                                                   "Ray)."),
+        rays: Optional[str] = typer.Option(None, "--rays", help="render.rays: 'adaptive' (the ray budget, the "
+                                           "default) or 'full' (one ray per pixel: the reference, and the bytes of "
+                                           "versions before the budget became the default)."),
     ) -> None:
         """Generate a dataset: one Pointcept-layout folder per scene plus manifest.json."""
         from ..pipeline import generate_dataset
 
         if backend not in ("local", "ray"):
             raise ConfigError(f"--backend must be local or ray, got {backend!r}")
+        if rays not in (None, "full", "adaptive"):
+            raise typer.BadParameter(f"{rays!r}: expected full or adaptive", param_hint="--rays")
         overrides: dict = {}
+        if rays is not None:
+            overrides["render"] = {"rays": rays}
         if seed is not None:
             overrides["seed"] = seed
         if assets is not None:
@@ -187,17 +194,22 @@ def register(app: typer.Typer) -> None:
         seed: int = typer.Option(0, "--seed", min=0, max=MAX_SEED, help="Global seed of the benchmark scenes."),
         keep: Optional[Path] = typer.Option(None, "--keep", help="Write the scenes here instead of a temp folder."),
         as_json: bool = typer.Option(False, "--json", help="Print JSON only."),
+        rays: Optional[str] = typer.Option(None, "--rays", help="render.rays: 'adaptive' (the ray budget, the default) "
+                                                "or 'full' (one ray per pixel, the reference)."),
     ) -> None:
         """Time the generator at paper settings (one worker): seconds per stage and peak memory."""
         from ..pipeline import run_benchmark
 
+        if rays not in (None, "full", "adaptive"):
+            raise typer.BadParameter(f"{rays!r}: expected full or adaptive", param_hint="--rays")
         res = run_benchmark(scenes=scenes, assets=str(assets) if assets else None, seed=seed,
-                            out=str(keep) if keep else None)
+                            out=str(keep) if keep else None, rays=rays)
         if as_json:
             sys.stdout.write(json.dumps(res) + "\n")
             return
 
-        t = Table(title=f"assist3d bench: {res['scenes']} scenes at paper settings, 1 worker")
+        t = Table(title=f"assist3d bench: {res['scenes']} scenes at paper settings, 1 worker, "
+                        f"rays {res['settings']['rays']}")
         t.add_column("stage")
         t.add_column("median s", justify="right")
         for k, v in res["stages"].items():

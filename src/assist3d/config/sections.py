@@ -179,11 +179,13 @@ class RenderConfig(Section):
     cy: float | None = Field(None, description="Principal point y, px; None = (height - 1) / 2.")
     threads: int = Field(2, ge=1, le=256, description="Ray-casting threads, at most 256.")
     rays: Literal["full", "adaptive"] = Field(
-        "full", description="Which rays a view casts: 'full' = one per pixel (the reference); 'adaptive' = a "
-                            "lattice of every ray_tile-th pixel, refined only where a tile's corner rays hit "
-                            "different triangles (edges, misses); the other pixels' depths come from their "
-                            "triangle's plane, so the view's pixels, and the points, labels and colours fused "
-                            "from them, are those of the full render (docs/generation.md, 'Ray budget').")
+        "adaptive", description="Which rays a view casts: 'adaptive' (the default) = a lattice of every ray_tile-th "
+                                "pixel, refined only where a tile's corner rays hit different triangles (edges, "
+                                "the open sky); the other pixels' depths come from their triangle's plane, so the "
+                                "view's pixels, and the points and labels fused from them, are those of the full "
+                                "render up to rounding (docs/generation.md, 'Ray budget'); 'full' = one ray per "
+                                "pixel (the reference, and the bytes of versions before the budget was the "
+                                "default; a dataset whose config lacks the key was made with it).")
     ray_tile: int = Field(8, ge=1, le=64, description="rays='adaptive': lattice stride of the first pass, px, a "
                                                       "power of two at most 64 (1 = every pixel).")
     voxel_size: float = Field(0.02, ge=0.001, le=1, description="Voxel downsampling size, m, 0.001..1 (paper: voxel "

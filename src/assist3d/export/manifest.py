@@ -40,6 +40,9 @@ def split_of(index: int) -> str:
 
 # settings that change speed or extra files, never the arrays: a resume may change them
 IGNORED_CONFIG_KEYS = (("render", "threads"), ("output", "ply"), ("output", "save_mesh"))
+#: options whose default changed: a config written before the option existed was made with this value,
+#: not with today's default
+LEGACY_DEFAULTS = {("render", "rays"): "full"}
 
 
 def read_manifest(root: str | Path, *, fix: str = "") -> dict | None:
@@ -93,9 +96,13 @@ def llm_summary(scenes: list[dict]) -> dict:
 
 
 def _comparable(cfg: dict) -> dict:
-    """``cfg`` without the ignored keys and with every option it lacks at today's default: a dataset
-    written before an option existed was made as if it had its default value, so it stays resumable."""
+    """``cfg`` without the ignored keys and with every option it lacks at today's default (or, for an
+    option whose default changed, at :data:`LEGACY_DEFAULTS`): a dataset written before an option
+    existed was made as if it had that value, so it stays resumable, and only with that value."""
     out = json.loads(json.dumps(cfg))
+    for (section, key), value in LEGACY_DEFAULTS.items():
+        if isinstance(out.get(section), dict):
+            out[section].setdefault(key, value)
     for section, defaults in config_to_dict(GenerateConfig()).items():
         if isinstance(defaults, dict) and isinstance(out.get(section), dict):
             for key, value in defaults.items():

@@ -353,16 +353,19 @@ def _progress_line(out: Path, indices: list[int], seed: int) -> str:
 
 
 def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, out: str | None = None,
-                  cfg: GenerateConfig | None = None) -> dict:
+                  cfg: GenerateConfig | None = None, rays: str | None = None) -> dict:
     """Generate ``scenes`` scenes at paper settings with one worker; per-stage medians and peak
     memory (max resident set size of this process, which includes the opened catalog).
 
     Returns ``{"scenes", "seconds_per_scene": {"median", "max"}, "stages": {stage: median s},
     "peak_memory_mb", ...}``. Opening (or first building) the catalog is timed separately.
-    ``cfg`` replaces the paper settings (tests use a tiny one).
+    ``cfg`` replaces the paper settings (tests use a tiny one); ``rays`` sets ``render.rays`` (the
+    reference render ``full`` or the ray budget ``adaptive``; default: the configuration's).
     """
     if cfg is None:
         cfg = parse_config({"seed": seed, "assets": {"library": assets}})
+    if rays is not None:
+        cfg = cfg.model_copy(update={"render": type(cfg.render).model_validate(cfg.render.model_dump() | {"rays": rays})})
     check_render_memory(cfg)
     t0 = time.perf_counter()
     gen = SceneGenerator(cfg)
@@ -385,5 +388,6 @@ def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, 
         "triangles_per_scene": statistics.median(m["triangles"] for m in metas),
         "catalog_seconds": round(catalog_s, 3),
         "settings": {"views": metas[0]["render"]["views"], "width": cfg.render.width, "height": cfg.render.height,
-                     "voxel_size": cfg.render.voxel_size, "backend": cfg.render.backend},
+                     "voxel_size": cfg.render.voxel_size, "backend": cfg.render.backend,
+                     "rays": cfg.render.rays},
     }

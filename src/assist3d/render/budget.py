@@ -12,6 +12,13 @@ The result is a full-resolution (t, face) pair for the view, equal to the full r
 rounding of the depth (float32) wherever nothing smaller than a tile stands in front of a flat
 tile's triangle without touching one of its corner rays. Everything downstream (depth sensor,
 per-voxel picks, colours, labels) is unchanged, so the same pixels pick the same points.
+
+Rays that leave the scene (a room has no ceiling by default) would all be cast, since a miss has no
+triangle to be flat on. So a ray that misses the scene is cast once more, against a *sky box* alone (:func:`sky_box`, an
+axis-aligned box a metre outside the scene's bounds, 12 triangles), and a tile whose corners hit one
+sky triangle is flat like any other (nothing smaller than a tile may stand in front of it, as
+above). Sky hits are reported as misses (t = inf, face = -1). The scene's own rays go through the
+caster of the full render, so where two triangles coincide, both pick the same one.
 """
 
 from __future__ import annotations
@@ -23,7 +30,7 @@ import numpy as np
 from ..core.contracts import Camera, SceneMesh
 from .raycast import RayCaster
 
-__all__ = ["FacePlanes", "face_planes", "lattice", "cast_adaptive"]
+__all__ = ["FacePlanes", "face_planes", "sky_box", "lattice", "cast_adaptive"]
 
 #: the 12 edges of a box whose 8 corners are numbered 4 i + 2 j + k (i, j, k: max in x, y, z)
 _EDGES = np.array([(c, c | bit) for bit in (1, 2, 4) for c in range(8) if not c & bit])
@@ -35,12 +42,15 @@ class FacePlanes:
     (by winding, unnormalised) and ``offset`` (F,) float64 with ``normal . x = offset`` on it; and
     ``bars`` (B, 8, 3) float64, the corners of an oriented box around every *slender* part of an
     object (see :func:`slender_parts`): the parts a coarse lattice of rays can step over; and
-    ``bar_of_face`` (F,) int64, the slender part each triangle belongs to (-1 for none)."""
+    ``bar_of_face`` (F,) int64, the slender part each triangle belongs to (-1 for none);
+    ``scene_faces``: where the planes of a sky box (:func:`sky_box`) follow the scene's, the number of
+    the scene's triangles (a hit on a triangle from there on is a miss); None when there is none."""
 
     normal: np.ndarray
     offset: np.ndarray
     bars: np.ndarray
     bar_of_face: np.ndarray | None = None
+    scene_faces: int | None = None
 
 
 #: a connected part of an object whose middle extent is below this (m) is slender: a rod, a slat,
@@ -93,12 +103,33 @@ def _slender(scene: SceneMesh, limit: float) -> tuple[np.ndarray, np.ndarray]:
     return mean[thin][:, None, :] + np.einsum("bck,bjk->bcj", corners_local, axes[thin]), of_face
 
 
-def face_planes(scene: SceneMesh) -> FacePlanes:
-    """Planes of all triangles of ``scene`` (float64, from its float32 vertices) and its slender parts."""
-    tri = scene.vertices[scene.faces].astype(np.float64)
+def sky_box(scene: SceneMesh, margin: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (8, 3) float32 and triangles (12, 3) int32 of an axis-aligned box ``margin`` metres
+    outside the bounds of ``scene``: every ray from inside the bounds hits it."""
+    lo = scene.vertices.min(0).astype(np.float64) - margin
+    hi = scene.vertices.max(0).astype(np.float64) + margin
+    corners = np.array([[(hi if i else lo)[0], (hi if j else lo)[1], (hi if k else lo)[2]]
+                        for i in (0, 1) for j in (0, 1) for k in (0, 1)], np.float32)  # 4 i + 2 j + k
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    return corners, np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))], np.int32)
+
+
+def _planes(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    tri = vertices[faces].astype(np.float64)
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    return n, np.einsum("ij,ij->i", n, tri[:, 0])
+
+
+def face_planes(scene: SceneMesh, *, sky: bool = False) -> FacePlanes:
+    """Planes of all triangles of ``scene`` (float64, from its float32 vertices) and its slender parts;
+    with ``sky``, followed by the planes of its :func:`sky_box` (triangle ``F + j`` is the box's ``j``)."""
+    n, off = _planes(scene.vertices, scene.faces)
     bars, of_face = _slender(scene, SLENDER)
-    return FacePlanes(n, np.einsum("ij,ij->i", n, tri[:, 0]), bars, of_face)
+    if not sky:
+        return FacePlanes(n, off, bars, of_face)
+    n_sky, off_sky = _planes(*sky_box(scene))
+    return FacePlanes(np.concatenate([n, n_sky]), np.concatenate([off, off_sky]), bars,
+                      np.append(of_face, np.full(len(n_sky), -1, np.int64)), len(scene.faces))
 
 
 def _bar_images(planes: FacePlanes, camera: Camera) -> tuple[np.ndarray, ...]:
@@ -136,6 +167,10 @@ def _bar_images(planes: FacePlanes, camera: Camera) -> tuple[np.ndarray, ...]:
     return bar[on], v0[on], v1[on], u0[on], u1[on], zmin[on]
 
 
+#: at most this many (part, cell) pairs are expanded at once in :func:`_occluders` (bounds its memory)
+_OCCLUDER_CHUNK = 1 << 16
+
+
 def _occluders(images: tuple[np.ndarray, ...], rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, ...]:
     """Per cell of the lattice ``rows`` x ``cols``, over the slender parts' images (from
     :func:`_bar_images`) that overlap it: the nearest depth ``z1`` (r, c) float64 (inf = none),
@@ -154,14 +189,30 @@ def _occluders(images: tuple[np.ndarray, ...], rows: np.ndarray, cols: np.ndarra
         j1 = np.clip(np.searchsorted(cols, u1, side="left"), 0, nc)
         hi_i, hi_j = np.maximum(i1 - i0, 0), np.maximum(j1 - j0, 0)
         size = hi_i * hi_j
-        if size.sum():
-            k = np.repeat(np.arange(len(size)), size)
-            m = np.arange(len(k)) - np.repeat(np.cumsum(size) - size, size)
-            cell = (i0[k] + m // hi_j[k]) * nc + j0[k] + m % hi_j[k]
-            z, who = zmin[k], bar[k]
+        # the parts in runs of at most _OCCLUDER_CHUNK cells (a larger part alone), in their order
+        ends = np.cumsum(size)
+        cuts = [0]
+        while cuts[-1] < len(size):
+            cuts.append(max(int(np.searchsorted(ends, (ends[cuts[-1] - 1] if cuts[-1] else 0) + _OCCLUDER_CHUNK,
+                                                side="right")), cuts[-1] + 1))
+
+        def expand(a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+            sz = size[a:b]
+            k = a + np.repeat(np.arange(b - a), sz)
+            m = np.arange(len(k)) - np.repeat(np.cumsum(sz) - sz, sz)
+            return (i0[k] + m // hi_j[k]) * nc + j0[k] + m % hi_j[k], zmin[k], bar[k]
+
+        runs = [(a, b) for a, b in zip(cuts[:-1], cuts[1:]) if size[a:b].sum()]
+        one = expand(*runs[0]) if len(runs) == 1 else None
+        for a, b in runs:  # nearest depth per cell
+            cell, z, _ = one or expand(a, b)
             np.minimum.at(z1, cell, z)
+        for a, b in runs:  # the part at that depth (the last of equals)
+            cell, z, who = one or expand(a, b)
             first = z == z1[cell]
             id1[cell[first]] = who[first]
+        for a, b in runs:  # the nearest depth of any other part
+            cell, z, who = one or expand(a, b)
             other = who != id1[cell]
             np.minimum.at(z2, cell[other], z[other])
     return z1.reshape(nr, nc), id1.reshape(nr, nc), z2.reshape(nr, nc)
@@ -181,12 +232,13 @@ def _tile_of(n: int, marks: np.ndarray) -> np.ndarray:
 
 
 def cast_adaptive(caster: RayCaster, planes: FacePlanes, camera: Camera, dirs: np.ndarray,
-                  tile: int) -> tuple[np.ndarray, np.ndarray, int]:
+                  tile: int, sky: RayCaster | None = None) -> tuple[np.ndarray, np.ndarray, int]:
     """(t (H*W,) float32, face (H*W,) int32, rays cast) of one view, as ``caster.cast`` over all its
     pixels would give (see the module docs for where it can differ).
 
     dirs (H*W, 3) float32 world directions of the camera's pixels, row-major; tile a power of two
-    >= 1 (1 casts every pixel).
+    >= 1 (1 casts every pixel). ``sky``: a caster over the :func:`sky_box` alone, used where
+    ``planes`` hold its planes (``face_planes(scene, sky=True)``).
     """
     width, height = camera.width, camera.height
     center = camera.pose[:3, 3].astype(np.float32)
@@ -203,7 +255,14 @@ def cast_adaptive(caster: RayCaster, planes: FacePlanes, camera: Camera, dirs: n
             return
         origins = np.empty((len(idx), 3), np.float32)
         origins[:] = center
-        t[idx], face[idx] = caster.cast(origins, dirs[idx])
+        d = dirs[idx]
+        tt, ff = caster.cast(origins, d)
+        if sky is not None and planes.scene_faces is not None:  # a miss: which sky triangle
+            out = np.flatnonzero(ff < 0)
+            if len(out):
+                tt[out], f_sky = sky.cast(origins[out], d[out])
+                ff[out] = np.where(f_sky >= 0, f_sky + planes.scene_faces, -1)
+        t[idx], face[idx] = tt, ff
         done[idx] = True
         cast += len(idx)
 
@@ -218,7 +277,11 @@ def cast_adaptive(caster: RayCaster, planes: FacePlanes, camera: Camera, dirs: n
     bar_of_face = planes.bar_of_face if planes.bar_of_face is not None else np.full(len(planes.offset), -1)
     active = np.ones((len(rows) - 1, len(cols) - 1), bool)
     offset = planes.offset - planes.normal @ center.astype(np.float64)  # per plane: n . (v0 - c)
-    while True:
+    # a plane's n . d over the pixels is separable: (R^T n) . ((u - cx) / fx, (v - cy) / fy, 1)
+    rot = camera.pose[:3, :3].astype(np.float64)
+    u_of = (np.arange(width, dtype=np.float64) - camera.cx) / camera.fx
+    v_of = (np.arange(height, dtype=np.float64) - camera.cy) / camera.fy
+    while s > 1:
         # cast the corners of the tiles still open at this level
         corner = np.zeros((len(rows), len(cols)), bool)
         corner[:-1, :-1] |= active
@@ -227,8 +290,6 @@ def cast_adaptive(caster: RayCaster, planes: FacePlanes, camera: Camera, dirs: n
         corner[1:, 1:] |= active
         rr, cc = np.nonzero(corner)
         run(rows[rr] * width + cols[cc])
-        if s == 1:
-            break
         lat = face_img[np.ix_(rows, cols)]
         f00 = lat[:-1, :-1]
         flat = active & (f00 >= 0) & (f00 == lat[1:, :-1]) & (f00 == lat[:-1, 1:]) & (f00 == lat[1:, 1:])
@@ -250,15 +311,12 @@ def cast_adaptive(caster: RayCaster, planes: FacePlanes, camera: Camera, dirs: n
             c = np.minimum(cols[tj][:, None] + off, cols[tj + 1][:, None])
             blk = (r[:, :, None] * width + c[:, None, :]).reshape(len(ti), -1)  # (k, (s + 1)^2)
             ft = f00[ti, tj]
-            # per pixel n . d with the tile's normal, in float64: the depths then round like the
-            # caster's, and few points change voxel
-            nrm = planes.normal[ft][:, None, :]
-            d = dirs[blk]  # (k, P, 3)
-            den = d[..., 0] * nrm[..., 0]
-            den += d[..., 1] * nrm[..., 1]
-            den += d[..., 2] * nrm[..., 2]
+            # per pixel n . d from the tile plane's camera-frame normal, in float64 (the depth is then
+            # that of the exact pixel ray; the caster's float32 ray may round it the other way)
+            a = planes.normal[ft] @ rot  # (k, 3)
+            den = (a[:, 0, None] * u_of[c])[:, None, :] + (a[:, 1, None] * v_of[r] + a[:, 2, None])[:, :, None]
             with np.errstate(divide="ignore", invalid="ignore"):
-                depth = (offset[ft][:, None] / den).astype(np.float32)
+                depth = (offset[ft][:, None] / den.reshape(len(ti), -1)).astype(np.float32)
             # a grazing plane is left to be cast; a pixel already known keeps its value
             good = ~done[blk] & np.isfinite(depth) & (depth > 0)
             idx = blk[good]
@@ -266,10 +324,18 @@ def cast_adaptive(caster: RayCaster, planes: FacePlanes, camera: Camera, dirs: n
             face[idx] = np.broadcast_to(ft[:, None], blk.shape)[good]
             done[idx] = True
         s //= 2
+        if s == 1:
+            break
         rows2, cols2 = lattice(height, s), lattice(width, s)
         pr = np.searchsorted(rows, rows2[:-1], side="right") - 1
         pc = np.searchsorted(cols, cols2[:-1], side="right") - 1
-        active = (active & ~flat)[pr[:, None], pc[None, :]]
+        active = (active & ~flat).take(pr, axis=0).take(pc, axis=1)
         rows, cols = rows2, cols2
-    run(np.flatnonzero(~done))  # nothing should be left; a safety net that keeps the view exact
+    # single pixels: every pixel not known yet (those of the tiles still open, and any a grazing
+    # plane left) is cast
+    run(np.flatnonzero(~done))
+    if planes.scene_faces is not None:  # the sky is a miss
+        sky = face >= planes.scene_faces
+        face[sky] = -1
+        t[sky] = np.inf
     return t, face, cast

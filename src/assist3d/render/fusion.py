@@ -21,9 +21,9 @@ from threadpoolctl import threadpool_limits
 
 from ..config import RenderConfig
 from ..core.contracts import Camera, SceneMesh
-from .budget import cast_adaptive, face_planes
+from .budget import cast_adaptive, face_planes, sky_box
 from .camera import pixel_directions, rotate_directions
-from .raycast import RayCaster
+from .raycast import RayCaster, make_caster
 from .sensor import apply_depth_sensor, sensor_enabled
 from .voxel import VoxelGrid, pick_one_per_voxel, pick_one_per_voxel_scan
 
@@ -104,14 +104,17 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
     salts = rng.integers(1, 2**62, size=len(cameras) + 1)
     sensor_seeds = rng.integers(0, 2**63, size=len(cameras))
     realism = sensor_enabled(cfg)
-    planes = face_planes(scene) if cfg.rays == "adaptive" else None
+    planes = sky = None
+    if cfg.rays == "adaptive":  # misses are cast again against a sky box (budget.py): flat tiles too
+        planes = face_planes(scene, sky=True)
+        sky = make_caster(cfg.backend, *sky_box(scene))
 
     def one_view(i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, Any, int]:
         cam = cameras[i]
         dirs = rotate_directions(cam_dirs, cam.pose)
         center = cam.pose[:3, 3].astype(np.float32)
         if planes is not None:
-            t, face, n_cast = cast_adaptive(caster, planes, cam, dirs, cfg.ray_tile)
+            t, face, n_cast = cast_adaptive(caster, planes, cam, dirs, cfg.ray_tile, sky)
         else:
             origins = np.zeros_like(dirs)
             for j in range(3):

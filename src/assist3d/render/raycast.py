@@ -59,11 +59,19 @@ class EmbreeCaster:
         self._mesh = TriangleMesh(self._scene, np.ascontiguousarray(vertices, dtype=np.float32),
                                   np.ascontiguousarray(faces, dtype=np.int32))
 
+    #: rays per Embree call: embreex returns nine values a ray (barycentrics, normal, ids), so a whole
+    #: view at once would hold ~11 MB of them per view in flight
+    chunk = 1 << 16
+
     def cast(self, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         o, d = _check_rays(origins, directions)
-        res = self._scene.run(o, d, output=1)
-        face = np.asarray(res["primID"], dtype=np.int32)
-        t = np.asarray(res["tfar"], dtype=np.float32)
+        n = len(o)
+        t = np.empty(n, np.float32)
+        face = np.empty(n, np.int32)
+        for a in range(0, n, self.chunk):
+            res = self._scene.run(o[a:a + self.chunk], d[a:a + self.chunk], output=1)
+            face[a:a + self.chunk] = res["primID"]
+            t[a:a + self.chunk] = res["tfar"]
         t[face < 0] = np.inf
         return t, face
 
