@@ -28,8 +28,8 @@ CONFIG_ARGS=()
 if [[ -n "$PROBE_CONFIG" ]]; then CONFIG_ARGS=(--config "$PROBE_CONFIG"); fi
 mkdir -p "$OUT"
 # generate skips the scenes a folder already holds, so a re-run only finishes what is missing
-$ASSIST3D generate --out "$OUT/data-s0" --num-scenes "$N0" --seed 0 --preset assist3d --workers 2 --assets "$ASSETS"
-$ASSIST3D generate --out "$OUT/data-s1" --num-scenes "$N1" --seed 1 --preset assist3d --workers 2 --assets "$ASSETS"
+$ASSIST3D generate --out "$OUT/data-s0" --num-scenes "$N0" --seed 0 --preset assist3d --workers 2 --rays full --assets "$ASSETS"
+$ASSIST3D generate --out "$OUT/data-s1" --num-scenes "$N1" --seed 1 --preset assist3d --workers 2 --rays full --assets "$ASSETS"
 $ASSIST3D probe --train "assist3d:$OUT/data-s0" --train "assist3d:$OUT/data-s1" --eval "array:$DEV" \
   --steps "$STEPS" --seeds 1 "${CONFIG_ARGS[@]}" --out "$OUT/probe" --json > "$OUT/probe.json"
 $PYTHON "$HERE/hybrid_eval.py" "$OUT/probe/seed_0/model.pt" --eval "array:$DEV" --eval "array:$EXTRA" \

@@ -16,7 +16,7 @@ DEV=${DEV:-../shared/data/real/dev}
 DEVICE=${DEVICE:-cpu}
 mkdir -p "$OUT/data"
 data() {  # data PRESET: make sure OUT/data/PRESET holds 250 scenes of that preset (seed 0)
-  $A generate --out "$OUT/data/$1" --num-scenes 250 --seed 0 --preset "$1" --workers 2 --json \
+  $A generate --out "$OUT/data/$1" --num-scenes 250 --seed 0 --preset "$1" --workers 2 --rays full --json \
     > "$OUT/generate-$1.json" 2> "$OUT/generate-$1.log"
 }
 rooms=$(ls "$DEV"/*.npy | xargs -n1 basename | cut -c1-9 | sort -u)

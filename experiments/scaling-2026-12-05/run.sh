@@ -2,6 +2,7 @@
 # Scaling curves (plan.md). Resumable: every probe keeps its finished seeds and resumes an unfinished one
 # from its last.pt, and generate keeps the scenes a folder holds; re-run the same command to continue.
 #   experiments/scaling-2026-12-05/run.sh OUT [POINTS]     (from the repository root)
+# The data is the full render (--rays full), as when the study began (the ray budget became the default later).
 # POINTS: space-separated "STEPS:SCENES" (default: the plan's order for a CPU); SEEDS (default "0 1").
 set -euo pipefail
 OUT=${1:?usage: run.sh OUT [POINTS]}
@@ -14,7 +15,7 @@ DEVICE=${DEVICE:-cpu}
 mkdir -p "$OUT"
 NEED=0
 for p in $POINTS; do s=${p#*:}; [ "$s" -gt "$NEED" ] && NEED=$s; done
-$A generate --out "$OUT/data" --num-scenes "$NEED" --seed 0 --preset assist3d --workers 2 --json \
+$A generate --out "$OUT/data" --num-scenes "$NEED" --seed 0 --preset assist3d --workers 2 --rays full --json \
   > "$OUT/generate-$NEED.json" 2> "$OUT/generate-$NEED.log"
 for p in $POINTS; do
   steps=${p%%:*}; scenes=${p#*:}
