@@ -365,7 +365,8 @@ def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, 
     if cfg is None:
         cfg = parse_config({"seed": seed, "assets": {"library": assets}})
     if rays is not None:
-        cfg = cfg.model_copy(update={"render": type(cfg.render).model_validate(cfg.render.model_dump() | {"rays": rays})})
+        render = type(cfg.render).model_validate(cfg.render.model_dump() | {"rays": rays})
+        cfg = cfg.model_copy(update={"render": render})
     check_render_memory(cfg)
     t0 = time.perf_counter()
     gen = SceneGenerator(cfg)

@@ -14,11 +14,12 @@ tile's triangle without touching one of its corner rays. Everything downstream (
 per-voxel picks, colours, labels) is unchanged, so the same pixels pick the same points.
 
 Rays that leave the scene (a room has no ceiling by default) would all be cast, since a miss has no
-triangle to be flat on. So a ray that misses the scene is cast once more, against a *sky box* alone (:func:`sky_box`, an
-axis-aligned box a metre outside the scene's bounds, 12 triangles), and a tile whose corners hit one
-sky triangle is flat like any other (nothing smaller than a tile may stand in front of it, as
-above). Sky hits are reported as misses (t = inf, face = -1). The scene's own rays go through the
-caster of the full render, so where two triangles coincide, both pick the same one.
+triangle to be flat on. So a ray that misses the scene is cast once more, against a *sky box*
+alone (:func:`sky_box`, an axis-aligned box a metre outside the scene's bounds, 12 triangles), and
+a tile whose corners hit one sky triangle is flat like any other (nothing smaller than a tile may
+stand in front of it, as above). Sky hits are reported as misses (t = inf, face = -1). The scene's
+own rays go through the caster of the full render, so where two triangles coincide, both pick the
+same one.
 """
 
 from __future__ import annotations
@@ -223,12 +224,6 @@ def lattice(n: int, stride: int) -> np.ndarray:
     the last pixel. The lattice of ``stride / 2`` contains the lattice of ``stride``."""
     pts = np.arange(0, n, stride, dtype=np.int64)
     return pts if pts[-1] == n - 1 else np.append(pts, n - 1)
-
-
-def _tile_of(n: int, marks: np.ndarray) -> np.ndarray:
-    """(n,) int64 index of the tile between consecutive ``marks`` that each pixel lies in (a pixel
-    on a mark goes to the tile starting there; the last pixel to the last tile)."""
-    return np.clip(np.searchsorted(marks, np.arange(n), side="right") - 1, 0, max(len(marks) - 2, 0))
 
 
 def cast_adaptive(caster: RayCaster, planes: FacePlanes, camera: Camera, dirs: np.ndarray,
