@@ -119,7 +119,7 @@ def main() -> None:
                     ax.scatter([st] * len(v), v, color=colour, s=10, alpha=0.5)
         if shipped.exists():
             for kind, colour in (("learned", "tab:blue"), ("hybrid", "tab:orange")):
-                ax.axhline(ship_cells[kind][0], color=colour, ls=":", lw=1, label=f"shipped model, {kind}")
+                ax.axhline(ship_cells[kind][0], color=colour, ls=":", lw=1, label=f"model v1 (shipped before), {kind}")
         one = [st for st, _, n, _ in rows if n < 2]
         if one:
             ax.annotate("one seed so far", (one[-1], rows[-1][3]["learned"][0]), textcoords="offset points",
