@@ -60,6 +60,12 @@ def _summary_table(run, console) -> None:
     console.print(t)
 
 
+def _check_rays(rays: str | None) -> None:
+    """``--rays``: None (the configuration's) or one of render.rays' values."""
+    if rays not in (None, "full", "adaptive"):
+        raise typer.BadParameter(f"{rays!r}: expected full or adaptive", param_hint="--rays")
+
+
 def register(app: typer.Typer) -> None:
     @app.command()
     def generate(
@@ -102,8 +108,7 @@ def register(app: typer.Typer) -> None:
 
         if backend not in ("local", "ray"):
             raise ConfigError(f"--backend must be local or ray, got {backend!r}")
-        if rays not in (None, "full", "adaptive"):
-            raise typer.BadParameter(f"{rays!r}: expected full or adaptive", param_hint="--rays")
+        _check_rays(rays)
         overrides: dict = {}
         if rays is not None:
             overrides["render"] = {"rays": rays}
@@ -200,8 +205,7 @@ def register(app: typer.Typer) -> None:
         """Time the generator at paper settings (one worker): seconds per stage and peak memory."""
         from ..pipeline import run_benchmark
 
-        if rays not in (None, "full", "adaptive"):
-            raise typer.BadParameter(f"{rays!r}: expected full or adaptive", param_hint="--rays")
+        _check_rays(rays)
         res = run_benchmark(scenes=scenes, assets=str(assets) if assets else None, seed=seed,
                             out=str(keep) if keep else None, rays=rays)
         if as_json:

@@ -190,12 +190,10 @@ def _occluders(images: tuple[np.ndarray, ...], rows: np.ndarray, cols: np.ndarra
         j1 = np.clip(np.searchsorted(cols, u1, side="left"), 0, nc)
         hi_i, hi_j = np.maximum(i1 - i0, 0), np.maximum(j1 - j0, 0)
         size = hi_i * hi_j
-        # the parts in runs of at most _OCCLUDER_CHUNK cells (a larger part alone), in their order
-        ends = np.cumsum(size)
-        cuts = [0]
-        while cuts[-1] < len(size):
-            cuts.append(max(int(np.searchsorted(ends, (ends[cuts[-1] - 1] if cuts[-1] else 0) + _OCCLUDER_CHUNK,
-                                                side="right")), cuts[-1] + 1))
+        # the parts in runs, in their order, a run those whose first cell falls in one block of
+        # _OCCLUDER_CHUNK cells (so a run holds at most that many and one part more)
+        block = (np.cumsum(size) - size) // _OCCLUDER_CHUNK
+        cuts = [0, *(np.flatnonzero(np.diff(block)) + 1).tolist(), len(size)]
 
         def expand(a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             sz = size[a:b]

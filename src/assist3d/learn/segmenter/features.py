@@ -121,7 +121,12 @@ def neighbourhood_scatter(centres: np.ndarray, k: int, tree: cKDTree | None = No
     runs on every core (the same neighbours as on one)."""
     k = min(k, len(centres))
     _, idx = (tree or cKDTree(centres)).query(centres, k=k, workers=-1)
-    nb = centres[idx.reshape(len(centres), k)]  # (V, k, 3)
+    return _scatter(centres, idx.reshape(len(centres), k))
+
+
+def _scatter(centres: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """(V, 3, 3) centred scatter matrix of the rows ``idx`` (V, k) of ``centres``."""
+    nb = centres[idx]  # (V, k, 3)
     nb = nb - nb.mean(1, keepdims=True)
     return np.einsum("vki,vkj->vij", nb, nb)
 
@@ -190,9 +195,7 @@ def shape_features(centres: np.ndarray, k: int = 12) -> np.ndarray:
     nz = np.abs(nz)
     odd = np.flatnonzero(~(w1 - w0 > _DEGENERATE * np.maximum(w2, 0.0)))  # NaN-safe
     if len(odd):  # the same computation as before for these rows: the same eigenvectors
-        nb = centres[idx[odd]]
-        nb = nb - nb.mean(1, keepdims=True)
-        w, vec = np.linalg.eigh(np.einsum("vki,vkj->vij", nb, nb) / kk)
+        w, vec = np.linalg.eigh(_scatter(centres, idx[odd]) / kk)
         w0[odd], w1[odd], w2[odd] = w[:, 0], w[:, 1], w[:, 2]
         nz[odd] = np.abs(vec[:, 2, 0])
     w0, w1, w2 = np.maximum(w0, 0.0), np.maximum(w1, 0.0), np.maximum(w2, 0.0)
