@@ -28,6 +28,7 @@ ALLOWED: dict[tuple[str, str], str] = {
     ("pipeline/ray_backend.py", "read_text"): "a token file this process wrote a moment before (shared-folder probe)",
     ("learn/engine/loggers.py", "open"): "appends rows to its own metrics.csv",
     ("learn/segmenter/probe.py", "open"): "a child process's log file, opened for writing",
+    ("learn/segmenter/pack.py", "open"): "writes a scene pack's files (it reads them through np.memmap)",
     ("llm/schema.py", "json.loads"): "an LLM answer held in memory, not a file",
     ("llm/client.py", "json.loads"): "an HTTP response body held in memory, bounded by llm.max_response_bytes",
     ("data/s3dis.py", "np.loadtxt"): "parses bytes already read through the layer",

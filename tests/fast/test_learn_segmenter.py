@@ -333,6 +333,97 @@ def test_training_with_loader_workers_equals_training_without(tiny_scenes, tmp_p
     assert all(torch.equal(a[k], b[k]) for k in a)
 
 
+def test_scene_pack_gives_the_same_arrays_and_pickles_as_its_folder(tiny_scenes, tmp_path):
+    from assist3d.learn.segmenter.pack import ScenePack
+
+    empty = Scene(coord=np.zeros((0, 3), np.float32), color=np.zeros((0, 3), np.uint8), instance=np.zeros(0, np.int32))
+    scenes = [tiny_scenes[0], empty, tiny_scenes[1]]
+    pack = ScenePack.write(tmp_path / "pack", iter(scenes))
+    assert len(pack) == 3 and pack.points.tolist() == [len(s.coord) for s in scenes]
+    again = pickle.loads(pickle.dumps(pack))
+    assert len(pickle.dumps(pack)) < 2000  # the folder and offsets travel, not the arrays
+    for got in (pack, again):
+        for want, have in zip(scenes, got):
+            for f in ("coord", "color", "instance"):
+                a, b = getattr(want, f), getattr(have, f)
+                assert type(b) is np.ndarray and a.dtype == b.dtype and np.array_equal(a, b), f
+    assert np.array_equal(pack[-1].coord, tiny_scenes[1].coord)
+    with pytest.raises(IndexError):
+        pack[3]
+    with open(tmp_path / "pack" / "color.u8", "r+b") as fh:  # a damaged pack is refused, never misread
+        fh.truncate(5)
+    with pytest.raises(DataError, match="color.u8"):
+        ScenePack(tmp_path / "pack")[0]
+    (tmp_path / "unfinished").mkdir()
+    with pytest.raises(DataError, match="not a finished scene pack"):
+        ScenePack(tmp_path / "unfinished")
+
+
+def test_pack_training_scenes_keeps_the_order_and_counts_each_set(tiny_data, tmp_path):
+    from assist3d.learn.segmenter.probe import ProbeRequest, _training_mix, load_training_scenes, pack_training_scenes
+
+    spec = f"assist3d:{tiny_data}"
+    listed = load_training_scenes([spec, spec], max_scenes=1) + load_training_scenes([spec])
+    pack, sizes = pack_training_scenes([spec, spec, spec], tmp_path / "a", max_scenes=0)
+    assert sizes == [2, 2, 2] and len(pack) == 6
+    pack1, sizes1 = pack_training_scenes([spec, spec], tmp_path / "b", max_scenes=1)
+    assert sizes1 == [1, 1]
+    for want, have in zip(listed, [*pack1, *pack[4:]]):
+        assert np.array_equal(want.coord, have.coord) and np.array_equal(want.instance, have.instance)
+    req = ProbeRequest(train=(spec, spec), eval=(spec,), budget=Budget(steps=1), seeds=1,
+                       config=parse_segmenter_config(TINY_NET), max_train_scenes=1, weights=(1.0, 0.5))
+    mixed, probs = _training_mix(req, tmp_path / "c", lambda k, n: None)
+    assert len(mixed) == 2 and probs.tolist() == pytest.approx([2 / 3, 1 / 3])
+
+
+def test_temporary_pack_is_removed_and_clears_what_stopped_runs_left(tmp_path):
+    import socket
+    import subprocess
+    import sys
+
+    from assist3d.learn.segmenter.pack import PACK_PREFIX, temporary_pack
+
+    host = socket.gethostname().replace("-", "_") or "host"
+    done = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    dead, live = int(done.stdout), os.getppid()
+    for name in (f"{host}-{dead}-x1", f"{host}-{live}-x2", f"otherhost-{dead}-x3"):
+        (tmp_path / f"{PACK_PREFIX}{name}").mkdir()
+        (tmp_path / f"{PACK_PREFIX}{name}" / "coord.f32").write_bytes(b"0" * 12)
+    with temporary_pack(tmp_path) as mine:
+        assert mine.is_dir() and mine.parent == tmp_path and f"-{os.getpid()}-" in mine.name
+        left = sorted(p.name for p in tmp_path.iterdir())
+    assert not mine.exists()
+    assert f"{PACK_PREFIX}{host}-{dead}-x1" not in left  # a stopped run's pack (this host) is removed
+    assert f"{PACK_PREFIX}{host}-{live}-x2" in left and f"{PACK_PREFIX}otherhost-{dead}-x3" in left
+
+
+def test_loader_workers_read_a_pack_like_a_list(tiny_scenes, tmp_path):
+    from assist3d.learn.segmenter.pack import ScenePack
+
+    cfg = parse_segmenter_config(TINY_NET)
+    pack = ScenePack.write(tmp_path / "pack", tiny_scenes)
+    with BatchLoader(tiny_scenes, cfg, seed=4) as inline:
+        want = [inline.next() for _ in range(3)]
+    with BatchLoader(pack, cfg, seed=4, workers=1, prefetch=1) as ahead:
+        got = [ahead.next() for _ in range(3)]
+    for (_, wb), (_, gb) in zip(want, got):
+        for a, b in zip(wb, gb):
+            assert all(np.array_equal(getattr(a, f), getattr(b, f)) for f in ("coords", "feats", "fg", "offset"))
+
+
+@pytest.mark.slow
+def test_training_on_a_pack_equals_training_on_a_list(tiny_scenes, tmp_path, one_thread):
+    from assist3d.learn.segmenter.pack import ScenePack
+
+    cfg = parse_segmenter_config(TINY_NET)
+    pack = ScenePack.write(tmp_path / "pack", tiny_scenes)
+    train_segmenter(cfg, tiny_scenes, tmp_path / "list", seed=5, budget=Budget(steps=3))
+    train_segmenter(cfg, pack, tmp_path / "pack-run", seed=5, budget=Budget(steps=3))
+    a = load_segmenter(tmp_path / "list" / "last.pt").model.state_dict()
+    b = load_segmenter(tmp_path / "pack-run" / "last.pt").model.state_dict()
+    assert all(torch.equal(a[k], b[k]) for k in a)
+
+
 class _Evil:
     def __init__(self, marker: str):
         self.marker = marker
@@ -454,6 +545,7 @@ def test_probe_runs_end_to_end_writes_the_json_contract_and_resumes(tiny_data, t
     assert r2.exit_code == 0, r2.output
     assert json.loads(r2.stdout[r2.stdout.index("{"):])["runs"] == data["runs"]
     assert (out / "seed_0" / "model.pt").stat().st_mtime_ns == stamp
+    assert not list(out.glob(".train-pack-*"))  # the training scenes' pack is gone with the run
     # other settings in the same folder are refused
     r3 = runner.invoke(app, [("3" if a == "2" and args[i - 1] == "--steps" else a) for i, a in enumerate(args)])
     assert r3.exit_code != 0 and "other settings" in str(r3.exception or r3.output)

@@ -35,9 +35,10 @@ import os
 import subprocess
 import sys
 import time
+from contextlib import ExitStack
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Callable, Iterator, Sequence
 
 import numpy as np
 import yaml
@@ -54,6 +55,7 @@ from .config import BEFORE_ADDED, SegmenterConfig, legacy_config
 from .data import Scene
 from .hybrid import HYBRID_GEOMETRIC, HybridConfig
 from .loader import mix_probabilities
+from .pack import ScenePack, temporary_pack
 from .predictor import STEPS, Predictor
 from .superpoints import SuperpointConfig
 from .train import Budget, train_segmenter
@@ -141,31 +143,60 @@ class ProbeRequest:
         return out
 
 
-def load_training_scenes(specs: Sequence[str], max_scenes: int = 0,
-                         progress: Callable[[int, int], None] | None = None) -> list[Scene]:
-    """Every scene of every spec (the first ``max_scenes`` of each when > 0), kept compactly in memory."""
+def _read_training_scenes(specs: Sequence[str], max_scenes: int,
+                          progress: Callable[[int, int], None] | None) -> Iterator[tuple[int, Scene]]:
+    """``(set index, scene)`` of every usable scene of every spec in order (the first ``max_scenes`` of
+    each when > 0), read one at a time; a scene without points is skipped with a warning."""
     datasets = [open_dataset(s) for s in specs]
-    jobs = [(ds, i) for ds in datasets for i in range(len(ds) if max_scenes <= 0 else min(max_scenes, len(ds)))]
-    scenes = []
-    for k, (ds, i) in enumerate(jobs):
+    jobs = [(k, ds, i) for k, ds in enumerate(datasets)
+            for i in range(len(ds) if max_scenes <= 0 else min(max_scenes, len(ds)))]
+    for n, (k, ds, i) in enumerate(jobs):
         sample = ds[i]
         if len(sample) == 0:
             log.warning("%s: scene %s has no points; skipped", ds.root, sample.scene_id)
-            continue
-        scenes.append(Scene.from_sample(sample))
+        else:
+            yield k, Scene.from_sample(sample)
         if progress is not None:
-            progress(k + 1, len(jobs))
+            progress(n + 1, len(jobs))
+
+
+def load_training_scenes(specs: Sequence[str], max_scenes: int = 0,
+                         progress: Callable[[int, int], None] | None = None) -> list[Scene]:
+    """Every scene of every spec (the first ``max_scenes`` of each when > 0), kept compactly in memory."""
+    scenes = [s for _, s in _read_training_scenes(specs, max_scenes, progress)]
     if not scenes:
         raise DataError(f"no usable training scenes in {', '.join(specs)}")
     return scenes
 
 
-def _training_mix(req: "ProbeRequest", progress: Callable[[int, int], None]) -> tuple[list[Scene], np.ndarray | None]:
-    """The pooled training scenes and, for a weighted request, their draw probabilities."""
+def pack_training_scenes(specs: Sequence[str], root: Path, max_scenes: int = 0,
+                         progress: Callable[[int, int], None] | None = None) -> tuple[ScenePack, list[int]]:
+    """:func:`load_training_scenes` into a :class:`.pack.ScenePack` in ``root`` instead of memory (the same
+    scenes in the same order, never more than one in memory); also the number of scenes of each spec."""
+    sizes = [0] * len(specs)
+
+    def counted() -> Iterator[Scene]:
+        for k, scene in _read_training_scenes(specs, max_scenes, progress):
+            sizes[k] += 1
+            yield scene
+
+    pack = ScenePack.write(root, counted())
+    if len(pack) == 0:
+        raise DataError(f"no usable training scenes in {', '.join(specs)}")
+    return pack, sizes
+
+
+def _training_mix(req: "ProbeRequest", root: Path,
+                  progress: Callable[[int, int], None]) -> tuple[ScenePack, np.ndarray | None]:
+    """The pooled training scenes, as a pack in ``root``, and, for a weighted request, their draw
+    probabilities."""
+    pack, sizes = pack_training_scenes(req.train, root, req.max_train_scenes, progress=progress)
     if not req.weighted:
-        return load_training_scenes(req.train, req.max_train_scenes, progress=progress), None
-    sets = [load_training_scenes([spec], req.max_train_scenes, progress=progress) for spec in req.train]
-    return [s for one in sets for s in one], mix_probabilities([len(one) for one in sets], req.weights)
+        return pack, None
+    for spec, n in zip(req.train, sizes):
+        if n == 0:
+            raise DataError(f"no usable training scenes in {spec}")
+    return pack, mix_probabilities(sizes, req.weights)
 
 
 def bootstrap(matches: Sequence[SceneMatches], seed: int = 0, draws: int = BOOTSTRAP_DRAWS) -> dict[str, list[float]]:
@@ -278,6 +309,53 @@ def _run_row(seed: int, metrics: dict, meta: dict) -> dict:
             "ci95": metrics["ci95"], "per_scene": metrics["per_scene"], "predict_seconds": metrics["predict_seconds"]}
 
 
+def _probe_seeds(req: ProbeRequest, out: Path, first_seed: int, hybrid: bool, emit: Callable[[str, dict], None],
+                 *, device: str, loader_workers: int) -> list[dict]:
+    """Each seed's row, trained and scored where it is not yet. The training scenes are read once, when a
+    seed first needs them, into a scene pack in ``out`` (:mod:`.pack`) that is removed on return."""
+    scenes: ScenePack | None = None
+    probs: np.ndarray | None = None
+    runs: list[dict] = []
+    with ExitStack() as stack:
+        for seed in range(first_seed, first_seed + req.seeds):
+            sdir = out / f"seed_{seed}"
+            result_path = sdir / "result.json"
+            if result_path.is_file():
+                run = reading.read_json(result_path)
+                if not isinstance(run, dict):
+                    raise DataError(f"{shown(result_path, 400)}: expected a JSON object; "
+                                    "remove it to run the seed again")
+                runs.append(_with_hybrid(run, sdir, req, seed, emit) if hybrid else run)
+                emit("seed_done", {"seed": seed, "cached": True, **runs[-1]})
+                continue
+            model_path = sdir / "model.pt"
+            if not model_path.is_file():
+                if scenes is None:
+                    emit("load_start", {})
+                    scenes, probs = _training_mix(req, stack.enter_context(temporary_pack(out)),
+                                                  lambda k, n: emit("load", {"done": k, "total": n}))
+                emit("train_start", {"seed": seed})
+                rec = train_segmenter(req.config, scenes, sdir, seed=seed, budget=req.budget,
+                                      meta={"train": list(req.train)} | ({"weights": list(req.weights)} if req.weighted
+                                                                         else {}),
+                                      device=device, loader_workers=loader_workers, probs=probs,
+                                      on_step=lambda row: emit("step", {"seed": seed, **row}))
+                loaded = load_segmenter(rec.checkpoint)  # with optim.ema_decay: the averaged weights
+                save_segmenter(model_path, loaded.model, req.config,
+                               meta=loaded.meta | ({"weights": "ema"} if loaded.ema_state is not None else {}))
+            meta = load_segmenter(model_path).meta
+            emit("eval_start", {"seed": seed})
+            metrics = evaluate_model(model_path, req.eval, sdir / "pred",
+                                     on_scene=lambda k, n: emit("eval", {"seed": seed, "done": k, "total": n}))
+            run = _run_row(seed, metrics, meta)
+            write_json_atomic(result_path, run)  # the learned figures are kept even if hybrid scoring stops
+            if hybrid:
+                run = _with_hybrid(run, sdir, req, seed, emit)
+            runs.append(run)
+            emit("seed_done", {"seed": seed, "cached": False, **run})
+    return runs
+
+
 def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", loader_workers: int = 0,
               hybrid: bool = False, first_seed: int = 0,
               on_event: Callable[[str, dict], None] | None = None) -> dict:
@@ -287,42 +365,7 @@ def run_probe(req: ProbeRequest, out_dir: str | Path, *, device: str = "cpu", lo
     each writes its own ``seed_K`` folders, and a later call over the whole range reads them all."""
     out = _open_out(out_dir, req, first_seed)
     emit = on_event or (lambda kind, info: None)
-    scenes: list[Scene] | None = None
-    runs = []
-    for seed in range(first_seed, first_seed + req.seeds):
-        sdir = out / f"seed_{seed}"
-        result_path = sdir / "result.json"
-        if result_path.is_file():
-            run = reading.read_json(result_path)
-            if not isinstance(run, dict):
-                raise DataError(f"{shown(result_path, 400)}: expected a JSON object; remove it to run the seed again")
-            runs.append(_with_hybrid(run, sdir, req, seed, emit) if hybrid else run)
-            emit("seed_done", {"seed": seed, "cached": True, **runs[-1]})
-            continue
-        model_path = sdir / "model.pt"
-        if not model_path.is_file():
-            if scenes is None:
-                emit("load_start", {})
-                scenes, probs = _training_mix(req, lambda k, n: emit("load", {"done": k, "total": n}))
-            emit("train_start", {"seed": seed})
-            rec = train_segmenter(req.config, scenes, sdir, seed=seed, budget=req.budget,
-                                  meta={"train": list(req.train)} | ({"weights": list(req.weights)} if req.weighted
-                                                                     else {}),
-                                  device=device, loader_workers=loader_workers, probs=probs,
-                                  on_step=lambda row: emit("step", {"seed": seed, **row}))
-            loaded = load_segmenter(rec.checkpoint)  # with optim.ema_decay: the averaged weights
-            save_segmenter(model_path, loaded.model, req.config,
-                           meta=loaded.meta | ({"weights": "ema"} if loaded.ema_state is not None else {}))
-        meta = load_segmenter(model_path).meta
-        emit("eval_start", {"seed": seed})
-        metrics = evaluate_model(model_path, req.eval, sdir / "pred",
-                                 on_scene=lambda k, n: emit("eval", {"seed": seed, "done": k, "total": n}))
-        run = _run_row(seed, metrics, meta)
-        write_json_atomic(result_path, run)  # the learned figures are kept even if hybrid scoring stops
-        if hybrid:
-            run = _with_hybrid(run, sdir, req, seed, emit)
-        runs.append(run)
-        emit("seed_done", {"seed": seed, "cached": False, **run})
+    runs = _probe_seeds(req, out, first_seed, hybrid, emit, device=device, loader_workers=loader_workers)
     summary = summarise_runs([{k: v for k, v in r.items() if k != "hybrid"} for r in runs])
     if runs and all(isinstance(r.get("hybrid"), dict) and _current(r["hybrid"].get("inference")) for r in runs):
         summary["hybrid"] = summarise_runs([r["hybrid"] for r in runs])
