@@ -123,3 +123,26 @@ def test_layout_json_round_trip():
     assert back.to_json() == lay.to_json()
     with pytest.raises(ValueError):
         inst.pose[0, 0] = 2.0
+
+
+def test_help_texts_keep_their_bracketed_words():
+    """The CLI's help goes through rich markup, which silently drops an unescaped "[view]" or "[ray]" (an
+    extra's name) as if it were a style tag: every such bracket in a help text must be escaped."""
+    import re
+
+    import click
+    import typer
+
+    from assist3d.cli import app
+
+    tag = re.compile(r"(?<!\\)\[[a-z#/@][^\[\]]*\]")
+    bad = []
+
+    def walk(cmd: click.Command, name: str) -> None:
+        texts = [cmd.help or "", *(getattr(p, "help", None) or "" for p in cmd.params)]
+        bad.extend(f"{name}: {m}" for t in texts for m in tag.findall(t))
+        for sub_name, sub in getattr(cmd, "commands", {}).items():
+            walk(sub, f"{name} {sub_name}")
+
+    walk(typer.main.get_command(app), "assist3d")
+    assert not bad, bad

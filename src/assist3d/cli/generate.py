@@ -95,7 +95,7 @@ def register(app: typer.Typer) -> None:
         as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
         backend: str = typer.Option("local", "--backend", help="local (worker processes on this machine) or ray "
                                                                "(one task per scene on a Ray cluster; needs the "
-                                                               "[ray] extra and --out on storage every node sees)."),
+                                                               "\\[ray] extra and --out on storage every node sees)."),
         ray_address: Optional[str] = typer.Option(None, "--ray-address", help="Ray cluster HOST:PORT or "
                                                   "ray://HOST:PORT (default: Ray's discovery, else a new local "
                                                   "Ray)."),

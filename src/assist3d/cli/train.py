@@ -29,7 +29,7 @@ def register(app: typer.Typer) -> None:
     @app.command("train")
     def train_cmd(
         config: Path = typer.Option(..., "--config", "-c", help="training config YAML (presets in configs/)"),
-        data: list[str] = typer.Option(None, "--data", help="[real=|synthetic=]FORMAT:PATH; replaces the config's "
+        data: list[str] = typer.Option(None, "--data", help="\\[real=|synthetic=]FORMAT:PATH; replaces the config's "
                                        "training sets (repeatable; assist3d: defaults to synthetic, others to real)"),
         out: Path = typer.Option(Path("runs/train"), "--out", "-o", help="folder for checkpoints and metrics.csv"),
         resume: bool = typer.Option(False, "--resume", help="continue from OUT/last.pt"),

@@ -53,7 +53,8 @@ def view_cmd(
 ) -> None:
     """Write one HTML file that shows a scene, scan or segmentation in 3D: colour by RGB / instance / class /
     prediction, ground truth and prediction side by side, hover a point for its instance and class. The
-    file holds plotly.js and the points: it opens offline in any browser. Needs the [view] extra."""
+    file holds plotly.js and the points: it opens offline in any browser. Needs the \\[view] extra."""
+    # (the backslash keeps the rich help from reading "[view]" as a markup tag and dropping it)
     from ..view import available_colors, load_view, plotly_js, subsample, write_viewer
 
     plotly_js()  # the extra is there, before reading a large scan
