@@ -424,6 +424,28 @@ def test_training_on_a_pack_equals_training_on_a_list(tiny_scenes, tmp_path, one
     assert all(torch.equal(a[k], b[k]) for k in a)
 
 
+def test_jobs_seed_processes_train_on_the_pack_their_parent_wrote(tiny_data, tmp_path, monkeypatch, caplog):
+    from assist3d.learn.segmenter import probe as probe_mod
+
+    spec = f"assist3d:{tiny_data}"
+    pack, _ = probe_mod.pack_training_scenes([spec, spec], tmp_path / "pack", max_scenes=1)
+    req = probe_mod.ProbeRequest(train=(spec, spec), eval=(spec,), budget=Budget(steps=1), seeds=1,
+                                 config=parse_segmenter_config(TINY_NET), max_train_scenes=1, weights=(2.0, 1.0))
+    monkeypatch.setenv(probe_mod.PACK_ENV, str(pack.root))
+
+    def no_reading(*a, **k):
+        raise AssertionError("a seed process read the training scenes again")
+
+    monkeypatch.setattr(probe_mod, "_read_training_scenes", no_reading)
+    got, probs = probe_mod._shared_mix(req)
+    assert got.root == pack.root and len(got) == 2 and probs.tolist() == pytest.approx([2 / 3, 1 / 3])
+    other = probe_mod.ProbeRequest(train=(spec,), eval=(spec,), budget=Budget(steps=1), seeds=1,
+                                   config=parse_segmenter_config(TINY_NET))
+    assert probe_mod._shared_mix(other) is None and "other training sets" in caplog.text
+    monkeypatch.delenv(probe_mod.PACK_ENV)
+    assert probe_mod._shared_mix(req) is None
+
+
 class _Evil:
     def __init__(self, marker: str):
         self.marker = marker
@@ -593,14 +615,22 @@ def test_probe_jobs_need_a_step_budget_and_a_seed_process_stops_without_its_pare
 
 
 @pytest.mark.slow
-def test_probe_jobs_name_the_failed_processes_and_their_logs(tmp_path):
+def test_probe_jobs_name_the_failed_processes_and_their_logs(tiny_data, tmp_path):
+    cfg = tmp_path / "seg.yaml"
+    cfg.write_text(json.dumps(TINY_NET))
     out = tmp_path / "probe"
-    r = runner.invoke(app, ["probe", "--train", f"assist3d:{tmp_path / 'missing'}", "--eval", "array:x.npy",
-                            "--steps", "2", "--seeds", "2", "--jobs", "2", "--out", str(out)])
+    r = runner.invoke(app, ["probe", "--train", f"assist3d:{tiny_data}", "--eval", f"array:{tmp_path / 'gone.npy'}",
+                            "--steps", "1", "--seeds", "2", "--jobs", "2", "--out", str(out), "--config", str(cfg)])
     assert r.exit_code != 0
     msg = str(r.exception or r.output)
     assert "2 of 2 probe processes failed" in msg and "seed_1.log" in msg
-    assert "missing" in (out / "jobs" / "seed_0.log").read_text()
+    assert "gone.npy" in (out / "jobs" / "seed_0.log").read_text()
+    assert not list(out.glob(".train-pack-*"))  # the shared pack is removed with the run
+    # training sets that cannot be read stop the probe before any seed process starts
+    r = runner.invoke(app, ["probe", "--train", f"assist3d:{tmp_path / 'missing'}", "--eval", "array:x.npy",
+                            "--steps", "2", "--seeds", "2", "--jobs", "2", "--out", str(tmp_path / "p2")])
+    assert r.exit_code != 0 and "missing" in str(r.exception or r.output)
+    assert not (tmp_path / "p2" / "jobs" / "seed_0.log").exists()
 
 
 @pytest.mark.slow

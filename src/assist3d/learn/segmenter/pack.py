@@ -16,6 +16,7 @@ Layout of a pack folder::
     coord.f32      (N, 3) float32, all scenes' points in order
     color.u8       (N, 3) uint8
     instance.i32   (N,)   int32
+    info.json      what the writer recorded about the scenes (optional; e.g. the probe's training sets)
     offsets.npy    (S + 1,) int64, scene k is rows offsets[k]:offsets[k + 1]; written last
 
 :func:`temporary_pack` puts a pack in a hidden folder of an output directory (never in ``/tmp``,
@@ -30,7 +31,7 @@ import os
 import shutil
 import socket
 import tempfile
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -38,6 +39,7 @@ import numpy as np
 
 from ...core import reading
 from ...core.errors import DataError
+from ...core.fileio import write_json_atomic
 from .data import Scene
 
 log = logging.getLogger(__name__)
@@ -65,8 +67,10 @@ class ScenePack(Sequence[Scene]):
         self._maps: tuple[np.ndarray, ...] | None = None
 
     @classmethod
-    def write(cls, root: str | os.PathLike, scenes: Iterable[Scene]) -> "ScenePack":
-        """Write ``scenes`` (read one at a time, never held together) as a pack in ``root``."""
+    def write(cls, root: str | os.PathLike, scenes: Iterable[Scene], info: Callable[[], dict] | None = None
+              ) -> "ScenePack":
+        """Write ``scenes`` (read one at a time, never held together) as a pack in ``root``; ``info``, called
+        once they are written, gives what :attr:`info` returns."""
         out = Path(root)
         out.mkdir(parents=True, exist_ok=True)
         offsets = [0]
@@ -84,8 +88,19 @@ class ScenePack(Sequence[Scene]):
         finally:
             for h in handles:
                 h.close()
+        if info is not None:
+            write_json_atomic(out / "info.json", info())
         np.save(out / "offsets.npy", np.asarray(offsets, np.int64))  # last: marks the pack finished
         return cls(out)
+
+    @property
+    def info(self) -> dict:
+        """What the writer recorded (``{}`` when nothing)."""
+        path = self.root / "info.json"
+        got = reading.read_json(path) if path.is_file() else {}
+        if not isinstance(got, dict):
+            raise DataError(f"{path}: expected a JSON object")
+        return got
 
     def _open(self) -> tuple[np.ndarray, ...]:
         if self._maps is None:

@@ -65,6 +65,8 @@ log = logging.getLogger(__name__)
 RUN_KEYS: tuple[str, ...] = ("AP", "AP50", "AP25", "AR")
 #: set by ``run_probe_jobs`` in each child's environment: the pid of the process that started it
 PARENT_ENV = "ASSIST3D_PROBE_PARENT"
+#: names, for the seed processes of ``--jobs``, the scene pack of the training scenes their parent wrote
+PACK_ENV = "ASSIST3D_PROBE_PACK"
 BOOTSTRAP_DRAWS = 1000
 METHODS: tuple[str, ...] = ("learned", "hybrid", "geometric")
 
@@ -172,7 +174,9 @@ def load_training_scenes(specs: Sequence[str], max_scenes: int = 0,
 def pack_training_scenes(specs: Sequence[str], root: Path, max_scenes: int = 0,
                          progress: Callable[[int, int], None] | None = None) -> tuple[ScenePack, list[int]]:
     """:func:`load_training_scenes` into a :class:`.pack.ScenePack` in ``root`` instead of memory (the same
-    scenes in the same order, never more than one in memory); also the number of scenes of each spec."""
+    scenes in the same order, never more than one in memory); also the number of scenes of each spec. The
+    pack's ``info`` records the specs, ``max_scenes`` and those numbers (``train``, ``max_train_scenes``,
+    ``sets``)."""
     sizes = [0] * len(specs)
 
     def counted() -> Iterator[Scene]:
@@ -180,10 +184,20 @@ def pack_training_scenes(specs: Sequence[str], root: Path, max_scenes: int = 0,
             sizes[k] += 1
             yield scene
 
-    pack = ScenePack.write(root, counted())
+    pack = ScenePack.write(root, counted(), info=lambda: {"train": list(specs), "max_train_scenes": max_scenes,
+                                                          "sets": sizes})
     if len(pack) == 0:
         raise DataError(f"no usable training scenes in {', '.join(specs)}")
     return pack, sizes
+
+
+def _mix_of(req: "ProbeRequest", pack: ScenePack, sizes: Sequence[int]) -> tuple[ScenePack, np.ndarray | None]:
+    if not req.weighted:
+        return pack, None
+    for spec, n in zip(req.train, sizes):
+        if n == 0:
+            raise DataError(f"no usable training scenes in {spec}")
+    return pack, mix_probabilities(sizes, req.weights)
 
 
 def _training_mix(req: "ProbeRequest", root: Path,
@@ -191,12 +205,21 @@ def _training_mix(req: "ProbeRequest", root: Path,
     """The pooled training scenes, as a pack in ``root``, and, for a weighted request, their draw
     probabilities."""
     pack, sizes = pack_training_scenes(req.train, root, req.max_train_scenes, progress=progress)
-    if not req.weighted:
-        return pack, None
-    for spec, n in zip(req.train, sizes):
-        if n == 0:
-            raise DataError(f"no usable training scenes in {spec}")
-    return pack, mix_probabilities(sizes, req.weights)
+    return _mix_of(req, pack, sizes)
+
+
+def _shared_mix(req: "ProbeRequest") -> tuple[ScenePack, np.ndarray | None] | None:
+    """The training scenes of a ``--jobs`` seed process: the pack its parent wrote (named by
+    :data:`PACK_ENV`), when it holds this request's training sets; None otherwise."""
+    path = os.environ.get(PACK_ENV)
+    if not path:
+        return None
+    pack = ScenePack(path)
+    info = pack.info
+    if info.get("train") != list(req.train) or info.get("max_train_scenes") != req.max_train_scenes:
+        log.warning("%s: holds other training sets than this probe's; reading them again", path)
+        return None
+    return _mix_of(req, pack, [int(n) for n in info.get("sets", [])])
 
 
 def bootstrap(matches: Sequence[SceneMatches], seed: int = 0, draws: int = BOOTSTRAP_DRAWS) -> dict[str, list[float]]:
@@ -332,8 +355,8 @@ def _probe_seeds(req: ProbeRequest, out: Path, first_seed: int, hybrid: bool, em
             if not model_path.is_file():
                 if scenes is None:
                     emit("load_start", {})
-                    scenes, probs = _training_mix(req, stack.enter_context(temporary_pack(out)),
-                                                  lambda k, n: emit("load", {"done": k, "total": n}))
+                    scenes, probs = _shared_mix(req) or _training_mix(
+                        req, stack.enter_context(temporary_pack(out)), lambda k, n: emit("load", {"done": k, "total": n}))
                 emit("train_start", {"seed": seed})
                 rec = train_segmenter(req.config, scenes, sdir, seed=seed, budget=req.budget,
                                       meta={"train": list(req.train)} | ({"weights": list(req.weights)} if req.weighted
@@ -395,7 +418,8 @@ def run_probe_jobs(req: ProbeRequest, out_dir: str | Path, *, jobs: int, device:
     --first-seed S`` process writing its ``seed_S`` folder (its log in ``DIR/jobs/seed_S.log``); then the
     summary over the seeds, read back. Meant for a GPU machine, where one process leaves the device
     partly idle (on an H200, four at once trained about 1.7 times the steps per second of one); on a
-    CPU the processes share the cores. Each process holds its own copy of the training scenes."""
+    CPU the processes share the cores. The training scenes are read once, by this process, into a scene
+    pack (:mod:`.pack`) that every seed process reads."""
     if jobs < 1:
         raise ConfigError(f"--jobs {jobs}: must be at least 1")
     if req.budget.steps is None:
@@ -417,6 +441,20 @@ def run_probe_jobs(req: ProbeRequest, out_dir: str | Path, *, jobs: int, device:
             f"--loader-workers={loader_workers}", "--json", *(["--hybrid"] if hybrid else []),
             *[f"--weight={w!r}" for w in req.weights]]
     child_env = {**os.environ, PARENT_ENV: str(os.getpid())}  # the child stops if this process dies
+    with ExitStack() as stack:
+        if any(not (out / f"seed_{s}" / "model.pt").is_file() for s in todo):  # some seed trains: share its scenes
+            emit("load_start", {})
+            root = stack.enter_context(temporary_pack(out))
+            _training_mix(req, root, lambda k, n: emit("load", {"done": k, "total": n}))
+            child_env[PACK_ENV] = str(root)
+        _run_jobs(base, todo, jobs, logs, child_env, emit)
+    return run_probe(req, out, device=device, loader_workers=loader_workers, hybrid=hybrid,
+                     first_seed=first_seed, on_event=on_event)
+
+
+def _run_jobs(base: list[str], todo: list[int], jobs: int, logs: Path, child_env: dict,
+              emit: Callable[[str, dict], None]) -> None:
+    """Run ``base --seeds=1 --first-seed=S`` for every seed of ``todo``, ``jobs`` at once; raise if any failed."""
     pending, running, failed = list(todo), {}, {}
     try:
         while pending or running:
@@ -450,8 +488,6 @@ def run_probe_jobs(req: ProbeRequest, out_dir: str | Path, *, jobs: int, device:
         msg = f"{len(failed)} of {len(todo)} probe processes failed: {names}; the finished seeds are kept"
         # exit status 2 is a refused input in every child: say so; anything else is a fault of the run
         raise (DataError if set(failed.values()) == {2} else FaultError)(msg)
-    return run_probe(req, out, device=device, loader_workers=loader_workers, hybrid=hybrid,
-                     first_seed=first_seed, on_event=on_event)
 
 
 def _with_hybrid(run: dict, sdir: Path, req: ProbeRequest, seed: int, emit: Callable[[str, dict], None]) -> dict:
