@@ -4,7 +4,8 @@
 
 1. Shipped model: among the points with two or more seeds, the one with the highest mean learned AP50
    over the 6 rooms replaces the shipped model only if that mean exceeds the shipped model's (measured
-   the same way: shipped/hybrid_eval-shipped.json) by more than the point's seed spread (std over seeds).
+   the same way: the newest of SHIPPED_EVALS, today segmenter-v2.pt's) by more than the point's seed spread
+   (std over seeds).
 2. `segment` default, for the chosen model (the best point if it replaces the shipped model, else the
    shipped model): hybrid stays only if it is above the network alone in at least 5 of the 6 rooms and the
    mean difference is positive with a 95 % interval (rooms resampled, bench/evaluation/compare.py, as
@@ -39,10 +40,16 @@ def hybrid_rule(learned: dict[str, float], hybrid: dict[str, float]) -> tuple[bo
     return keep, text
 
 
+#: scripts/hybrid_eval.py's figures of each model shipped so far, the newest first: the rule measures a point
+#: against the model users get now
+SHIPPED_EVALS = ("hybrid_eval-shipped-v2.json", "hybrid_eval-shipped.json")
+
+
 def main() -> None:
     points = {k: v for k, v in load().items() if len(v) >= 2}
-    shipped_file = HERE / "shipped" / "hybrid_eval-shipped.json"
-    model = next(iter(json.loads(shipped_file.read_text())["models"].values()))
+    shipped_file = next(HERE / "shipped" / f for f in SHIPPED_EVALS if (HERE / "shipped" / f).is_file())
+    name, model = next(iter(json.loads(shipped_file.read_text())["models"].items()))
+    print(f"the shipped model: {name.rsplit('/', 1)[-1]} ({shipped_file.name})")
     ship = {kind: {s: v["AP50"] for g in model[kind] for s, v in g["scans"].items()} for kind in ("learned", "hybrid")}
     ship_mean = six_room_mean({s: {"AP50": v} for s, v in ship["learned"].items()})
     if not points:
@@ -68,7 +75,7 @@ def main() -> None:
         learned, hybrid, which = ship["learned"], ship["hybrid"], "the shipped model"
     keep, text = hybrid_rule(learned, hybrid)
     print(f"segment default, for {which}: {text}: "
-          + ("hybrid STAYS the default" if keep else "the network alone (--method learned) BECOMES the default"))
+          + ("hybrid inference is the default" if keep else "the network alone (--method learned) is the default"))
 
 
 if __name__ == "__main__":
