@@ -432,6 +432,9 @@ def test_jobs_seed_processes_train_on_the_pack_their_parent_wrote(tiny_data, tmp
     req = probe_mod.ProbeRequest(train=(spec, spec), eval=(spec,), budget=Budget(steps=1), seeds=1,
                                  config=parse_segmenter_config(TINY_NET), max_train_scenes=1, weights=(2.0, 1.0))
     monkeypatch.setenv(probe_mod.PACK_ENV, str(pack.root))
+    monkeypatch.delenv(probe_mod.PARENT_ENV, raising=False)
+    assert probe_mod._shared_mix(req) is None  # honoured only in a seed process of --jobs
+    monkeypatch.setenv(probe_mod.PARENT_ENV, str(os.getpid()))
 
     def no_reading(*a, **k):
         raise AssertionError("a seed process read the training scenes again")

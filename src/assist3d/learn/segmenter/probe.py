@@ -212,7 +212,7 @@ def _shared_mix(req: "ProbeRequest") -> tuple[ScenePack, np.ndarray | None] | No
     """The training scenes of a ``--jobs`` seed process: the pack its parent wrote (named by
     :data:`PACK_ENV`), when it holds this request's training sets; None otherwise."""
     path = os.environ.get(PACK_ENV)
-    if not path:
+    if not path or not os.environ.get(PARENT_ENV):  # only a seed process started by --jobs
         return None
     pack = ScenePack(path)
     info = pack.info
