@@ -12,6 +12,8 @@ Output folder (resumable; a finished seed is never redone, an unfinished one res
     DIR/seed_K/pred_hybrid/   with ``hybrid=True``: predictions of hybrid inference, whose metrics are
                               added to result.json under ``hybrid``
     DIR/summary.json          runs, mean and std over seeds (the --json output; ``hybrid`` too)
+    DIR/.train-pack-HOST-PID-*/  while seeds train: the training scenes as a scene pack (``pack.py``), read
+                              once and trained from through memory maps; removed when the probe ends
 
 The figures of ``runs``/``mean``/``std`` score the network's instances alone: the probe measures
 training data, and the geometric proposals of hybrid inference do not depend on it. ``hybrid=True``
