@@ -175,8 +175,8 @@ def _remove_stale(parent: Path, host: str) -> None:
 
 @contextmanager
 def temporary_pack(parent: str | os.PathLike) -> Iterator[Path]:
-    """A new empty folder for a pack inside ``parent`` (``.train-pack-HOST-PID-XXXX``), removed on exit;
-    packs that stopped runs of this host left in ``parent`` are removed first."""
+    """A new empty folder for a pack inside ``parent`` (``.train-pack-HOST-PID-`` and a random suffix),
+    removed on exit; packs that stopped runs of this host left in ``parent`` are removed first."""
     base = Path(parent)
     base.mkdir(parents=True, exist_ok=True)
     host = socket.gethostname().replace("-", "_") or "host"
