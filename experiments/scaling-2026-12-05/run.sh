@@ -4,6 +4,8 @@
 #   experiments/scaling-2026-12-05/run.sh OUT [POINTS]     (from the repository root)
 # The data is the full render (--rays full), as when the study began (the ray budget became the default later).
 # POINTS: space-separated "STEPS:SCENES" (default: the plan's order for a CPU); SEEDS (default "0 1").
+# DATA: train on a dataset made elsewhere instead of generating OUT/data (2,000:2,000 used the 2,000 scenes
+# of scripts/scale_bench.sh, the default ray-budget render; see plan.md).
 set -euo pipefail
 OUT=${1:?usage: run.sh OUT [POINTS]}
 POINTS=${2:-"200:250 821:250 2000:250 2000:60 8210:250"}
@@ -15,13 +17,18 @@ DEVICE=${DEVICE:-cpu}
 mkdir -p "$OUT"
 NEED=0
 for p in $POINTS; do s=${p#*:}; [ "$s" -gt "$NEED" ] && NEED=$s; done
-$A generate --out "$OUT/data" --num-scenes "$NEED" --seed 0 --preset assist3d --workers 2 --rays full --json \
-  > "$OUT/generate-$NEED.json" 2> "$OUT/generate-$NEED.log"
+if [ -n "${DATA:-}" ]; then
+  D=$DATA
+else
+  D=$OUT/data
+  $A generate --out "$D" --num-scenes "$NEED" --seed 0 --preset assist3d --workers 2 --rays full --json \
+    > "$OUT/generate-$NEED.json" 2> "$OUT/generate-$NEED.log"
+fi
 for p in $POINTS; do
   steps=${p%%:*}; scenes=${p#*:}
   for k in $SEEDS; do
     date -u; echo "probe steps $steps scenes $scenes seed $k"
-    $A probe --train "assist3d:$OUT/data" --max-train-scenes "$scenes" --eval "array:$DEV" --eval "array:$EXTRA" \
+    $A probe --train "assist3d:$D" --max-train-scenes "$scenes" --eval "array:$DEV" --eval "array:$EXTRA" \
       --steps "$steps" --seeds 1 --first-seed "$k" --hybrid --threads 2 --device "$DEVICE" \
       --out "$OUT/probe-s$scenes-t$steps" --json > "$OUT/probe-s$scenes-t$steps-seed$k.json" \
       2> "$OUT/probe-s$scenes-t$steps-seed$k.log"
