@@ -312,15 +312,12 @@ def test_loader_workers_build_the_same_batches_in_order(tiny_scenes):
         want = [inline.next() for _ in range(4)]
     with BatchLoader(tiny_scenes, cfg, seed=7, start=5, workers=2, prefetch=1) as ahead:
         got = [ahead.next() for _ in range(4)]
-    with BatchLoader(tiny_scenes, cfg, seed=7, start=5, thread=True, prefetch=2) as threaded:
-        got_thread = [threaded.next() for _ in range(4)]
-    for got_ in (got, got_thread):
-        assert [s for s, _ in got_] == [5, 6, 7, 8]
-        for (ws, wb), (gs, gb) in zip(want, got_):
-            assert ws == gs and len(wb) == len(gb) == cfg.optim.batch_size
-            for a, b in zip(wb, gb):
-                for field in ("coords", "feats", "fg", "offset"):
-                    assert np.array_equal(getattr(a, field), getattr(b, field)), (ws, field)
+    assert [s for s, _ in got] == [5, 6, 7, 8]
+    for (ws, wb), (gs, gb) in zip(want, got):
+        assert ws == gs and len(wb) == len(gb) == cfg.optim.batch_size
+        for a, b in zip(wb, gb):
+            for field in ("coords", "feats", "fg", "offset"):
+                assert np.array_equal(getattr(a, field), getattr(b, field)), (ws, field)
     # another seed gives other batches (the seed is not ignored)
     with BatchLoader(tiny_scenes, cfg, seed=8, start=5) as other:
         assert not np.array_equal(other.next()[1][0].feats, want[0][1][0].feats)
@@ -329,13 +326,11 @@ def test_loader_workers_build_the_same_batches_in_order(tiny_scenes):
 @pytest.mark.slow
 def test_training_with_loader_workers_equals_training_without(tiny_scenes, tmp_path, one_thread):
     cfg = parse_segmenter_config(TINY_NET)
-    train_segmenter(cfg, tiny_scenes, tmp_path / "w0", seed=2, budget=Budget(steps=3), loader_thread=False)
+    train_segmenter(cfg, tiny_scenes, tmp_path / "w0", seed=2, budget=Budget(steps=3))
     train_segmenter(cfg, tiny_scenes, tmp_path / "w1", seed=2, budget=Budget(steps=3), loader_workers=1)
-    train_segmenter(cfg, tiny_scenes, tmp_path / "t1", seed=2, budget=Budget(steps=3), loader_thread=True)
     a = load_segmenter(tmp_path / "w0" / "last.pt").model.state_dict()
-    for other in ("w1", "t1"):
-        b = load_segmenter(tmp_path / other / "last.pt").model.state_dict()
-        assert all(torch.equal(a[k], b[k]) for k in a), other
+    b = load_segmenter(tmp_path / "w1" / "last.pt").model.state_dict()
+    assert all(torch.equal(a[k], b[k]) for k in a)
 
 
 def test_scene_pack_gives_the_same_arrays_and_pickles_as_its_folder(tiny_scenes, tmp_path):

@@ -151,35 +151,6 @@ def test_the_one_loader_gives_the_same_batches_with_workers_and_stops_where_told
         StepLoader(_square, workers=65)
 
 
-def test_the_loader_thread_builds_ahead_in_order_stops_where_told_and_raises_at_the_step():
-    import threading
-
-    from assist3d.learn.loader import StepLoader
-
-    built: list[tuple[int, str]] = []
-
-    def build(k):
-        built.append((k, threading.current_thread().name))
-        if k == 6:
-            raise ValueError("bad scene at step 6")
-        return _square(k)
-
-    with StepLoader(build, 3, 6, thread=True, prefetch=2) as ahead:
-        assert list(ahead) == [_square(k) for k in range(3, 6)]
-    # every batch was built once, off the training thread, and nothing past stop
-    assert sorted(k for k, _ in built) == [3, 4, 5]
-    assert all(name.startswith("assist3d-loader") for _, name in built)
-    built.clear()
-    with StepLoader(build, 4, thread=True, prefetch=2) as ahead:
-        assert ahead.next() == (4, _square(4))
-        assert ahead.next() == (5, _square(5))
-        with pytest.raises(ValueError, match="bad scene at step 6"):  # raised where step 6 is asked for
-            ahead.next()
-    assert {k for k, _ in built} <= {4, 5, 6, 7, 8}
-    # with workers the thread is not used (the processes build)
-    assert StepLoader(_square, workers=1, thread=True).thread is False
-
-
 def test_transforms_compose_into_recipes_that_keep_rows_and_draw_in_order():
     import numpy as np
 

@@ -51,9 +51,6 @@ def bench_train_cmd(
     device: str = typer.Option("cpu", "--device", help="cpu, cuda or auto"),
     loader_workers: int = typer.Option(0, "--loader-workers", min=0, max=64,
                                        help="processes that build examples ahead of each step"),
-    loader_thread: Optional[bool] = typer.Option(None, "--loader-thread/--no-loader-thread",
-                                                 help="with no loader workers, build the next steps' examples in a "
-                                                      "background thread (default: the training default)"),
     as_json: bool = typer.Option(False, "--json", help="print the figures as JSON"),
 ) -> None:
     """Time the segmenter's training loop (examples, forward, backward, optimiser): seconds per step,
@@ -73,10 +70,8 @@ def bench_train_cmd(
     if threads:
         torch.set_num_threads(threads)
     scenes = load_training_scenes(data, max_train_scenes)
-    from ..learn.segmenter.train import LOADER_THREAD
     result = bench_training(scenes, cfg, steps=steps, warmup=warmup, device=resolve_device(device),
-                            loader_workers=loader_workers,
-                            loader_thread=LOADER_THREAD if loader_thread is None else loader_thread)
+                            loader_workers=loader_workers)
     if as_json:
         typer.echo(json.dumps(result.as_dict(), indent=1))
         return

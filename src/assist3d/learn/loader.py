@@ -7,18 +7,11 @@ and the Mask3D-style model's step ``b`` of an epoch (:func:`.engine.loader.epoch
 change when a batch is built, never what it holds: any number of workers gives the same batches, and a run
 resumed at step ``k`` sees the batches an uninterrupted run would. ``build`` must be picklable when
 ``workers > 0`` (a module-level function or a ``functools.partial`` of one).
-
-With ``workers=0`` and ``thread=True`` one background thread of the training process builds the coming
-batches while the step runs: no pickling and no second copy of the scenes, and since numpy, scipy's
-neighbour search and torch release the GIL in their heavy loops, example building overlaps the network's
-step on the cores it leaves idle (docs/throughput.md has the measurement).
 """
 
 from __future__ import annotations
 
 import itertools
-from collections import deque
-from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Callable, Generic, Iterator, TypeVar
 
 from torch.utils.data import DataLoader, Dataset, Sampler
@@ -55,27 +48,20 @@ class StepLoader(Generic[T]):
     """Batches ``build(start)``, ``build(start + 1)``, ... (up to ``stop``, exclusive, or without end), in
     order; iterate it, or call :meth:`next`, inside a ``with`` block (which stops the workers at its end).
 
-    ``workers=0`` builds each batch when it is asked for, or with ``thread=True`` in one background thread up
-    to ``prefetch`` batches ahead; ``workers=N`` has ``N`` processes build up to ``prefetch`` batches each
-    ahead of the training step (``thread`` is then ignored). Every choice yields the same batches."""
+    ``workers=0`` builds each batch when it is asked for; ``workers=N`` has ``N`` processes build up to
+    ``prefetch`` batches each ahead of the training step."""
 
     def __init__(self, build: Callable[[int], T], start: int = 0, stop: int | None = None, *, workers: int = 0,
-                 prefetch: int = 2, thread: bool = False) -> None:
+                 prefetch: int = 2) -> None:
         if not (0 <= workers <= MAX_WORKERS):
             raise ConfigError(f"loader workers {workers}: expected 0 to {MAX_WORKERS}")
         self.build, self.next_step, self.stop, self.workers = build, start, stop, workers
-        self.thread = bool(thread) and workers == 0
-        self.prefetch = max(1, prefetch)
         self._loader = (DataLoader(_Built(build), batch_size=None, sampler=_Range(start, stop), num_workers=workers,
-                                   collate_fn=_as_is, prefetch_factor=self.prefetch) if workers else None)
+                                   collate_fn=_as_is, prefetch_factor=max(1, prefetch)) if workers else None)
         self._it: Iterator[T] | None = None
-        self._pool: ThreadPoolExecutor | None = None
-        self._ahead: deque[tuple[int, Future]] = deque()
 
     def __enter__(self) -> StepLoader[T]:
         self._it = iter(self._loader) if self._loader is not None else None
-        if self.thread:
-            self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="assist3d-loader")
         self._open = True
         return self
 
@@ -84,12 +70,6 @@ class StepLoader(Generic[T]):
 
     def close(self) -> None:
         self._open = False
-        pool, self._pool = self._pool, None
-        if pool is not None:  # drop the batches built ahead; wait for the one in progress (a step at most)
-            for _, fut in self._ahead:
-                fut.cancel()
-            self._ahead.clear()
-            pool.shutdown(wait=True, cancel_futures=True)
         it, self._it = self._it, None
         shutdown = getattr(it, "_shutdown_workers", None)  # stop worker processes now, not at garbage collection
         if shutdown is not None:
@@ -102,25 +82,9 @@ class StepLoader(Generic[T]):
         step = self.next_step
         if self.stop is not None and step >= self.stop:
             raise StopIteration
-        if self._pool is not None:
-            batch = self._from_thread(step)
-        else:
-            batch = next(self._it) if self._it is not None else self.build(step)
+        batch = next(self._it) if self._it is not None else self.build(step)
         self.next_step += 1
         return step, batch
-
-    def _from_thread(self, step: int) -> T:
-        """Step ``step``'s batch from the background thread, keeping ``prefetch`` later steps under way."""
-        assert self._pool is not None
-        if not self._ahead or self._ahead[0][0] != step:  # nothing ahead yet (the first call)
-            self._ahead.clear()
-            self._ahead.append((step, self._pool.submit(self.build, step)))
-        queued = self._ahead[-1][0]
-        while len(self._ahead) < 1 + self.prefetch and (self.stop is None or queued + 1 < self.stop):
-            queued += 1
-            self._ahead.append((queued, self._pool.submit(self.build, queued)))
-        _, fut = self._ahead.popleft()
-        return fut.result()  # an error in build is raised here, at the step that needed the batch
 
     def __iter__(self) -> Iterator[T]:
         while True:

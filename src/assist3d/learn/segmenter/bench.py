@@ -21,7 +21,7 @@ from ...core.errors import ConfigError
 from ..models.sparse import resolve_precision
 from .config import SegmenterConfig
 from .data import Scene
-from .train import LOADER_THREAD, Budget, train_segmenter
+from .train import Budget, train_segmenter
 
 MAX_BENCH_STEPS = 10_000
 
@@ -34,7 +34,6 @@ class TrainBench:
     precision: str
     threads: int
     loader_workers: int
-    loader_thread: bool
     batch_size: int
     scenes: int
     steps: int
@@ -51,8 +50,7 @@ class TrainBench:
 
 
 def bench_training(scenes: Sequence[Scene], cfg: SegmenterConfig, *, steps: int = 10, warmup: int = 3,
-                   device: str = "cpu", loader_workers: int = 0, seed: int = 0,
-                   loader_thread: bool = LOADER_THREAD) -> TrainBench:
+                   device: str = "cpu", loader_workers: int = 0, seed: int = 0) -> TrainBench:
     """Time ``steps`` training steps after ``warmup`` untimed ones (see the module docstring)."""
     if not (1 <= steps <= MAX_BENCH_STEPS) or not (0 <= warmup <= MAX_BENCH_STEPS):
         raise ConfigError(f"bench steps {steps} / warmup {warmup}: expected 1 to {MAX_BENCH_STEPS:,} timed steps "
@@ -69,13 +67,12 @@ def bench_training(scenes: Sequence[Scene], cfg: SegmenterConfig, *, steps: int 
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="assist3d-bench-train-") as tmp:
         train_segmenter(cfg, scenes, tmp, seed=seed, budget=Budget(steps=warmup + steps), device=device,
-                        loader_workers=loader_workers, on_step=on_step, loader_thread=loader_thread)
+                        loader_workers=loader_workers, on_step=on_step)
     wall = time.perf_counter() - t0
     timed = times[warmup:]
     med = statistics.median(timed)
     return TrainBench(device=device, precision=resolve_precision(cfg.optim.precision, device),
                       threads=torch.get_num_threads(), loader_workers=loader_workers,
-                      loader_thread=bool(loader_thread) and loader_workers == 0,
                       batch_size=cfg.optim.batch_size, scenes=len(scenes), steps=steps, warmup=warmup,
                       step_s_median=round(med, 4), step_s_min=round(min(timed), 4), step_s_max=round(max(timed), 4),
                       steps_per_s=round(1.0 / med, 4), examples_per_s=round(cfg.optim.batch_size / med, 4),

@@ -59,15 +59,14 @@ def build_batch(scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int, step: 
 
 class BatchLoader(StepLoader[list[Example]]):
     """The segmenter's batches of steps ``start, start + 1, ...`` in order (:func:`build_batch`); use as a
-    context manager. ``workers=0`` builds each batch when it is asked for (or, with ``thread``, in a
-    background thread ahead of the step); ``workers=N`` has ``N`` processes build up to ``prefetch`` batches
-    each ahead of the training step."""
+    context manager. ``workers=0`` builds each batch when it is asked for; ``workers=N`` has ``N`` processes
+    build up to ``prefetch`` batches each ahead of the training step."""
 
     def __init__(self, scenes: Sequence[Scene], cfg: SegmenterConfig, seed: int, start: int = 0, *,
-                 workers: int = 0, prefetch: int = 2, probs: np.ndarray | None = None, thread: bool = False):
+                 workers: int = 0, prefetch: int = 2, probs: np.ndarray | None = None):
         if not scenes:
             raise ConfigError("no training scenes")
         if probs is not None and len(probs) != len(scenes):
             raise ConfigError(f"{len(probs)} draw probabilities for {len(scenes)} training scenes")
         super().__init__(partial(build_batch, list(scenes), cfg, seed, probs=probs), start, workers=workers,
-                         prefetch=prefetch, thread=thread)
+                         prefetch=prefetch)

@@ -34,8 +34,6 @@ from .model import Segmenter
 log = logging.getLogger(__name__)
 
 CHECKPOINT_EVERY_S = 120.0
-#: build the next steps' examples in a background thread while the network trains (loader_workers=0)
-LOADER_THREAD = False
 
 
 @dataclass(frozen=True)
@@ -102,8 +100,7 @@ def _lr(cfg: SegmenterConfig, progress: float) -> float:
 def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str | Path, *, seed: int,
                     budget: Budget, meta: dict | None = None, device: str = "cpu", loader_workers: int = 0,
                     on_step: Callable[[dict], None] | None = None,
-                    loggers: Sequence[TrainLogger] = (), probs: np.ndarray | None = None,
-                    loader_thread: bool = LOADER_THREAD) -> TrainRecord:
+                    loggers: Sequence[TrainLogger] = (), probs: np.ndarray | None = None) -> TrainRecord:
     """Train on ``scenes`` into ``out_dir/last.pt`` (resumed when it exists); returns the record.
 
     Each step's row (``step, train_seconds, lr, loss, bce, offset, direction``) goes to
@@ -111,8 +108,7 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
     checkpoint that covers it is written, so a resumed run logs no step twice.
 
     ``loader_workers`` processes build the coming steps' examples while the network trains
-    (:mod:`.loader`); with none, ``loader_thread`` builds them in a background thread of this process.
-    The batches, and so the result, are the same either way and for any number of workers.
+    (:mod:`.loader`); the batches, and so the result, are the same for any number of workers.
     ``probs`` (per scene, :func:`.loader.mix_probabilities`) weights the draws; None draws uniformly.
     """
     if not scenes:
@@ -162,8 +158,7 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
         trainer.hooks.append(CallbackHook(on_step, lambda t: {"progress": budget.progress(t.steps, t.seconds)}))
     trainer.hooks.append(CheckpointHook(save, every_s=CHECKPOINT_EVERY_S))
     try:
-        with BatchLoader(scenes, cfg, seed, trainer.steps, workers=loader_workers, probs=probs,
-                         thread=loader_thread) as loader:
+        with BatchLoader(scenes, cfg, seed, trainer.steps, workers=loader_workers, probs=probs) as loader:
             trainer.fit(iter(lambda: loader.next()[1], None), until=lambda t: budget.progress(t.steps, t.seconds) >= 1.0)
     finally:
         close_all(sinks)
