@@ -1171,3 +1171,19 @@ def test_probe_takes_one_weight_per_training_set_and_records_it():
     mixed = ProbeRequest(train=("a", "b"), eval=("c",), budget=Budget(steps=2), seeds=1, config=cfg, weights=(1.0, 0.5))
     assert plain.as_dict() == ones.as_dict() and "weights" not in plain.as_dict()  # folders from before resume
     assert mixed.as_dict()["weights"] == [1.0, 0.5] and mixed.weighted and not ones.weighted
+
+
+def test_bench_training_times_the_real_loop_and_names_its_machine(tiny_scenes):
+    from assist3d.learn.segmenter.bench import bench_training
+
+    cfg = parse_segmenter_config(TINY_NET)
+    r = bench_training(tiny_scenes, cfg, steps=3, warmup=1)
+    assert r.steps == 3 and r.warmup == 1 and r.scenes == len(tiny_scenes) and r.device == "cpu"
+    assert 0 < r.step_s_min <= r.step_s_median <= r.step_s_max <= r.wall_s
+    assert r.steps_per_s == pytest.approx(1.0 / r.step_s_median, rel=1e-3)
+    assert r.examples_per_s == pytest.approx(cfg.optim.batch_size / r.step_s_median, rel=1e-3)
+    m = json.loads(json.dumps(r.as_dict()))["machine"]  # the JSON of bench-train --json
+    assert m["cores"] >= 1 and m["cpu"] and m["torch"] == torch.__version__ and m["gpu"] is None
+    assert isinstance(m["native_bfloat16"], bool)
+    with pytest.raises(ConfigError, match="bench steps 0"):
+        bench_training(tiny_scenes, cfg, steps=0)

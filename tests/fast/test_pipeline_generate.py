@@ -215,6 +215,8 @@ def test_generate_show_and_bench_commands(full_run, tmp_path):
     assert set(bench["seconds_per_scene"]) == {"median", "max"}
     assert set(bench["stages"]) == {"select", "layout", "assemble", "render", "fuse", "write"}
     assert bench["scenes"] == 2 and 0 < bench["peak_memory_mb"] < 4000
+    # every speed figure names its machine
+    assert bench["machine"]["cores"] >= 1 and bench["machine"]["cpu"] and json.dumps(bench["machine"])
 
 
 def test_a_second_writer_on_the_same_folder_is_refused(full_run):

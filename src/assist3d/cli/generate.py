@@ -227,4 +227,6 @@ def register(app: typer.Typer) -> None:
         t.add_row("points / scene (median)", f"{res['points_per_scene']:,.0f}")
         t.add_row("instances / scene (median)", f"{res['instances_per_scene']:.0f}")
         t.add_row("triangles / scene (median)", f"{res['triangles_per_scene']:,.0f}")
+        m = res["machine"]
+        t.caption = f"{m['cpu']}, {m['cores']} cores, {m['memory_gib']} GiB"
         Console().print(t)

@@ -75,7 +75,10 @@ def bench_train_cmd(
     if as_json:
         typer.echo(json.dumps(result.as_dict(), indent=1))
         return
-    table = Table(title=f"bench-train: {', '.join(data)}")
+    m = result.machine
+    table = Table(title=f"bench-train: {', '.join(data)}",
+                  caption=f"{m['gpu'] or m['cpu']}, {m['cores']} cores, torch {m['torch']}, "
+                          f"native bfloat16 {'yes' if m['native_bfloat16'] else 'no'}")
     for col in ("device", "precision", "threads", "s/step (median, min-max)", "steps/s", "examples/s"):
         table.add_column(col, justify="right")
     table.add_row(result.device, result.precision, str(result.threads),

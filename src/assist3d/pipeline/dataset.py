@@ -31,6 +31,7 @@ from ..core.errors import AssistError, ConfigError, DataError, FaultError, descr
 from ..export import Manifest, read_scene_meta
 from ..export.writer import export_scene_ply, remove_stale_temps
 from ..core.interrupts import Interrupted, worker_pool
+from ..core.machine import describe_machine
 from ..core.records import STAGES, stage_timings
 from ..core.rng import scene_seed
 from ..planning.planners import make_planner
@@ -358,7 +359,8 @@ def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, 
     memory (max resident set size of this process, which includes the opened catalog).
 
     Returns ``{"scenes", "seconds_per_scene": {"median", "max"}, "stages": {stage: median s},
-    "peak_memory_mb", ...}``. Opening (or first building) the catalog is timed separately.
+    "peak_memory_mb", ..., "machine"}`` (the machine: :func:`assist3d.core.machine.describe_machine`).
+    Opening (or first building) the catalog is timed separately.
     ``cfg`` replaces the paper settings (tests use a tiny one); ``rays`` sets ``render.rays`` (the
     reference render ``full`` or the ray budget ``adaptive``; default: the configuration's).
     """
@@ -391,4 +393,5 @@ def run_benchmark(*, scenes: int = 5, assets: str | None = None, seed: int = 0, 
         "settings": {"views": metas[0]["render"]["views"], "width": cfg.render.width, "height": cfg.render.height,
                      "voxel_size": cfg.render.voxel_size, "backend": cfg.render.backend,
                      "rays": cfg.render.rays},
+        "machine": describe_machine(),
     }

@@ -18,7 +18,8 @@ from typing import Sequence
 import torch
 
 from ...core.errors import ConfigError
-from ..models.sparse import resolve_precision
+from ...core.machine import describe_machine
+from ..models.sparse import native_bfloat16, resolve_precision
 from .config import SegmenterConfig
 from .data import Scene
 from .train import Budget, train_segmenter
@@ -44,9 +45,18 @@ class TrainBench:
     steps_per_s: float
     examples_per_s: float
     wall_s: float
+    machine: dict  # describe_machine() + torch, native_bfloat16 and the GPU's name on CUDA
 
     def as_dict(self) -> dict:
         return asdict(self)
+
+
+def machine_of(device: str) -> dict:
+    """:func:`assist3d.core.machine.describe_machine` with what decides a training step's speed here: the
+    torch version, whether the CPU multiplies bfloat16 natively (``optim.precision: auto`` uses it) and,
+    on CUDA, the GPU's name."""
+    gpu = torch.cuda.get_device_name(torch.device(device)) if torch.device(device).type == "cuda" else None
+    return {**describe_machine(), "torch": torch.__version__, "native_bfloat16": native_bfloat16("cpu"), "gpu": gpu}
 
 
 def bench_training(scenes: Sequence[Scene], cfg: SegmenterConfig, *, steps: int = 10, warmup: int = 3,
@@ -76,4 +86,4 @@ def bench_training(scenes: Sequence[Scene], cfg: SegmenterConfig, *, steps: int 
                       batch_size=cfg.optim.batch_size, scenes=len(scenes), steps=steps, warmup=warmup,
                       step_s_median=round(med, 4), step_s_min=round(min(timed), 4), step_s_max=round(max(timed), 4),
                       steps_per_s=round(1.0 / med, 4), examples_per_s=round(cfg.optim.batch_size / med, 4),
-                      wall_s=round(wall, 2))
+                      wall_s=round(wall, 2), machine=machine_of(device))
