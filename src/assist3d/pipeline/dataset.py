@@ -31,7 +31,7 @@ from ..core.errors import AssistError, ConfigError, DataError, FaultError, descr
 from ..export import Manifest, read_scene_meta
 from ..export.writer import export_scene_ply, remove_stale_temps
 from ..core.interrupts import Interrupted, worker_pool
-from ..core.machine import describe_machine
+from ..core.machine import describe_machine, usable_cores
 from ..core.records import STAGES, stage_timings
 from ..core.rng import scene_seed
 from ..planning.planners import make_planner
@@ -189,7 +189,7 @@ def _generate_dataset(cfg: GenerateConfig, out: str | Path, indices: Iterable[in
     check_render_memory(cfg, workers=min(workers, len(indices)) or 1)  # before any work starts
     for var in THREAD_ENV:
         os.environ.setdefault(var, "1")
-    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    cpus = usable_cores()
     threads = max(1, min(cfg.render.threads, cpus // workers)) if workers > 1 else cfg.render.threads
     check_plugins(cfg)  # an unregistered planner or ray caster is refused before anything is written
     if backend == "ray":
