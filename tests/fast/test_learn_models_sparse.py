@@ -230,3 +230,24 @@ def test_auto_precision_follows_the_cpu(monkeypatch):
     assert sp.resolve_precision("auto") == "float32"
     with pytest.raises(ValueError):
         sp.resolve_precision("fp8")
+
+
+def test_kernel_maps_from_the_dense_table_equal_the_searched_maps(monkeypatch):
+    gen = torch.Generator().manual_seed(11)
+    coords = _random_sites(gen, 2, 9, 400)
+    coords[:, 1:] -= 3
+    dense = sp.CoordSet.build(coords).submanifold_map(3)
+    monkeypatch.setattr(sp, "DENSE_GRID_CELLS", 0)  # forces the sorted-key search
+    searched = sp.CoordSet.build(coords).submanifold_map(3)
+    assert len(dense) == len(searched) == 27
+    assert dense[13] is None and searched[13] is None
+    for a, b in zip(dense, searched):
+        if a is not None:
+            assert torch.equal(a[0], b[0]) and torch.equal(a[1], b[1])
+    # every pair really is a neighbour at that offset, in the same scene
+    offs = sp.kernel_offsets(3)
+    for o, m in enumerate(dense):
+        if m is not None and len(m[1]):
+            src, dst = coords[m[0]].long(), coords[m[1]].long()
+            assert torch.equal(src[:, 0], dst[:, 0])
+            assert torch.equal(src[:, 1:] - dst[:, 1:], offs[o].expand(len(src), 3))
