@@ -87,9 +87,9 @@ def main() -> None:
             scans = {s: {"AP50": v["AP50"]} for g in model[kind] for s, v in g["scans"].items()}
             rm = room_means(scans)
             ship_cells[kind] = (sum(rm.values()) / len(rm), rm)
-        print(f"| shipped model (821 steps, 60 scenes) | | 1 | {ship_cells['learned'][0]:.3f} | {ship_cells['hybrid'][0]:.3f} |")
+        print(f"| model v1, shipped before (821 steps, 60 scenes) | | 1 | {ship_cells['learned'][0]:.3f} | {ship_cells['hybrid'][0]:.3f} |")
         print()
-        print("Shipped model per room, learned / hybrid: " + ", ".join(
+        print("Model v1 (shipped before) per room, learned / hybrid: " + ", ".join(
             f"{r} {ship_cells['learned'][1][r]:.3f}/{ship_cells['hybrid'][1][r]:.3f}" for r in ship_cells["learned"][1]))
     print()
     print("Per room, learned / hybrid AP50, mean over seeds:")
