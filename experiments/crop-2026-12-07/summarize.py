@@ -41,6 +41,8 @@ def figure(seeds: dict[int, dict], kind: str) -> tuple[float, float, list[float]
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--copy", type=Path, help="the run folder to copy finished seeds from")
+    ap.add_argument("--decide", action="store_true",
+                    help="exit 0 only if plan.md's AP criterion holds (two seeds, level with 6 m), else 1")
     a = ap.parse_args()
     (HERE / "per_seed").mkdir(exist_ok=True)
     if a.copy:
@@ -69,12 +71,14 @@ def main() -> None:
     base = figs["6 m crop (scaling 2,000:250)"]
     if crop is None or crop[2] < 2:
         print("\nThe 4.5 m crop has fewer than 2 seeds: by plan.md this decides nothing.")
-        return
+        raise SystemExit(1 if a.decide else 0)
     margin = max(base[1], crop[1])
     level = crop[0] >= base[0] - margin
     print(f"\n4.5 m {crop[0]:.3f} against 6 m {base[0]:.3f} (difference {crop[0] - base[0]:+.3f}, margin {margin:.3f}): "
           + ("not below by more than the margin: AP is level; adopt if the bench check holds (plan.md)"
              if level else "below by more than the margin: 6 m stays"))
+    if a.decide:
+        raise SystemExit(0 if level else 1)
 
 
 if __name__ == "__main__":

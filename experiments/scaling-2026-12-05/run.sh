@@ -6,6 +6,7 @@
 # POINTS: space-separated "STEPS:SCENES" (default: the plan's order for a CPU); SEEDS (default "0 1").
 # DATA: train on a dataset made elsewhere instead of generating OUT/data (2,000:2,000 used the 2,000 scenes
 # of scripts/scale_bench.sh, the default ray-budget render; see plan.md).
+# CONFIG: a segmenter config YAML for every probe (e.g. experiments/crop-2026-12-07/crop45.yaml; use its own OUT).
 set -euo pipefail
 OUT=${1:?usage: run.sh OUT [POINTS]}
 POINTS=${2:-"200:250 821:250 2000:250 2000:60 8210:250"}
@@ -14,6 +15,8 @@ A=${ASSIST3D:-assist3d}
 DEV=${DEV:-../shared/data/real/dev}
 EXTRA=${EXTRA:-../shared/data/real/scannet_scene0451_01.npy}
 DEVICE=${DEVICE:-cpu}
+CFG=()
+[ -n "${CONFIG:-}" ] && CFG=(--config "$CONFIG")
 mkdir -p "$OUT"
 NEED=0
 for p in $POINTS; do s=${p#*:}; [ "$s" -gt "$NEED" ] && NEED=$s; done
@@ -29,7 +32,7 @@ for p in $POINTS; do
   for k in $SEEDS; do
     date -u; echo "probe steps $steps scenes $scenes seed $k"
     $A probe --train "assist3d:$D" --max-train-scenes "$scenes" --eval "array:$DEV" --eval "array:$EXTRA" \
-      --steps "$steps" --seeds 1 --first-seed "$k" --hybrid --threads 2 --device "$DEVICE" \
+      --steps "$steps" --seeds 1 --first-seed "$k" --hybrid --threads 2 --device "$DEVICE" "${CFG[@]}" \
       --out "$OUT/probe-s$scenes-t$steps" --json > "$OUT/probe-s$scenes-t$steps-seed$k.json" \
       2> "$OUT/probe-s$scenes-t$steps-seed$k.log"
   done
