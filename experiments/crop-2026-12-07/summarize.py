@@ -38,22 +38,18 @@ def figure(seeds: dict[int, dict], kind: str) -> tuple[float, float, list[float]
     return statistics.fmean(per_seed), sd, per_seed, {r: statistics.fmean(v) for r, v in rooms.items()}
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--copy", type=Path, help="the run folder to copy finished seeds from")
-    ap.add_argument("--decide", action="store_true",
-                    help="exit 0 only if plan.md's AP criterion holds (two seeds, level with 6 m), else 1")
-    a = ap.parse_args()
-    (HERE / "per_seed").mkdir(exist_ok=True)
-    if a.copy:
-        for res in sorted(a.copy.glob("probe-crop45-s250-t2000/seed_*/result.json")):
-            dest = HERE / "per_seed" / f"crop45-s250-t2000-{res.parent.name}.json"
-            if not dest.exists():
-                shutil.copyfile(res, dest)
-                print(f"copied {dest.name}")
-    arms = {"6 m crop (scaling 2,000:250)": seeds_of(HERE.parent / "scaling-2026-12-05" / "per_seed",
-                                                     "probe-s250-t2000-seed_*.json"),
-            "4.5 m crop": seeds_of(HERE / "per_seed", "crop45-s250-t2000-seed_*.json")}
+def copy_seeds(run: Path, pattern: str, folder: Path, prefix: str) -> None:
+    """Copy each finished seed's ``run/<pattern>`` (.../seed_K/result.json) to folder/<prefix>-seed_K.json."""
+    folder.mkdir(exist_ok=True)
+    for res in sorted(run.glob(pattern)):
+        dest = folder / f"{prefix}-{res.parent.name}.json"
+        if not dest.exists():
+            shutil.copyfile(res, dest)
+            print(f"copied {dest.name}")
+
+
+def print_table(arms: dict[str, dict[int, dict]]) -> dict[str, tuple[float, float, int, dict[str, float]]]:
+    """The arms' table (learned and hybrid, per seed and per room); per arm with seeds (mean, spread, seeds, rooms)."""
     print("| arm | seeds | learned AP50, 6-room mean (per seed) | hybrid AP50 | learned per room |")
     print("| --- | ---: | --- | --- | --- |")
     figs = {}
@@ -63,10 +59,26 @@ def main() -> None:
             continue
         lm, ls, lv, lr = figure(seeds, "learned")
         hm, hs, hv, _ = figure(seeds, "hybrid")
-        figs[name] = (lm, ls, len(seeds))
+        figs[name] = (lm, ls, len(seeds), lr)
         spread = f" ± {ls:.3f}" if len(seeds) > 1 else " (one seed)"
         print(f"| {name} | {len(seeds)} | {lm:.3f}{spread} ({', '.join(f'{x:.3f}' for x in lv)}) | {hm:.3f} "
               f"({', '.join(f'{x:.3f}' for x in hv)}) | {', '.join(f'{r} {v:.3f}' for r, v in lr.items())} |")
+    return figs
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--copy", type=Path, help="the run folder to copy finished seeds from")
+    ap.add_argument("--decide", action="store_true",
+                    help="exit 0 only if plan.md's AP criterion holds (two seeds, level with 6 m), else 1")
+    a = ap.parse_args()
+    (HERE / "per_seed").mkdir(exist_ok=True)
+    if a.copy:
+        copy_seeds(a.copy, "probe-crop45-s250-t2000/seed_*/result.json", HERE / "per_seed", "crop45-s250-t2000")
+    arms = {"6 m crop (scaling 2,000:250)": seeds_of(HERE.parent / "scaling-2026-12-05" / "per_seed",
+                                                     "probe-s250-t2000-seed_*.json"),
+            "4.5 m crop": seeds_of(HERE / "per_seed", "crop45-s250-t2000-seed_*.json")}
+    figs = print_table(arms)
     crop = figs.get("4.5 m crop")
     base = figs["6 m crop (scaling 2,000:250)"]
     if crop is None or crop[2] < 2:

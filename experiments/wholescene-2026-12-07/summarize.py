@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
-import shutil
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -25,29 +24,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--copy", type=Path, help="the run folder to copy finished seeds from")
     a = ap.parse_args()
-    (HERE / "per_seed").mkdir(exist_ok=True)
     if a.copy:
-        for res in sorted(a.copy.glob("probe-s250-t2000/seed_*/result.json")):
-            dest = HERE / "per_seed" / f"whole-s250-t2000-{res.parent.name}.json"
-            if not dest.exists():
-                shutil.copyfile(res, dest)
-                print(f"copied {dest.name}")
-    arms = {"6 m crop (scaling 2,000:250)": crop.seeds_of(HERE.parent / "scaling-2026-12-05" / "per_seed",
-                                                          "probe-s250-t2000-seed_*.json"),
-            "whole scenes": crop.seeds_of(HERE / "per_seed", "whole-s250-t2000-seed_*.json")}
-    print("| arm | seeds | learned AP50, 6-room mean (per seed) | hybrid AP50 | learned per room |")
-    print("| --- | ---: | --- | --- | --- |")
-    figs = {}
-    for name, seeds in arms.items():
-        if not seeds:
-            print(f"| {name} | 0 | not run yet | | |")
-            continue
-        lm, ls, lv, lr = crop.figure(seeds, "learned")
-        hm, _, hv, _ = crop.figure(seeds, "hybrid")
-        figs[name] = (lm, ls, len(seeds), lr)
-        spread = f" ± {ls:.3f}" if len(seeds) > 1 else " (one seed)"
-        print(f"| {name} | {len(seeds)} | {lm:.3f}{spread} ({', '.join(f'{x:.3f}' for x in lv)}) | {hm:.3f} "
-              f"({', '.join(f'{x:.3f}' for x in hv)}) | {', '.join(f'{r} {v:.3f}' for r, v in lr.items())} |")
+        crop.copy_seeds(a.copy, "probe-s250-t2000/seed_*/result.json", HERE / "per_seed", "whole-s250-t2000")
+    figs = crop.print_table({
+        "6 m crop (scaling 2,000:250)": crop.seeds_of(HERE.parent / "scaling-2026-12-05" / "per_seed",
+                                                      "probe-s250-t2000-seed_*.json"),
+        "whole scenes": crop.seeds_of(HERE / "per_seed", "whole-s250-t2000-seed_*.json")})
     whole, base = figs.get("whole scenes"), figs["6 m crop (scaling 2,000:250)"]
     if whole is None:
         return
