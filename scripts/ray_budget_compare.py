@@ -1,8 +1,8 @@
-"""Is the adaptive ray budget's cloud the full render's cloud? Voxel coverage and label agreement.
+"""Is a ray budget's cloud the full render's cloud? Voxel coverage and label agreement.
 
 For scenes 0..N-1 of a dataset (preset assist3d unless --config, seed --seed), lays the scene out
 once and fuses it twice, with ``render.rays = full`` (the reference: one ray per pixel) and with
-``render.rays = adaptive``, from the same generator state. Both clouds hold one point per occupied
+``render.rays = adaptive`` (or ``--rays footprint``), from the same generator state. Both clouds hold one point per occupied
 2 cm voxel; per scene it prints
 
 * coverage: the share of the reference's occupied voxels that the adaptive cloud also occupies,
@@ -17,7 +17,7 @@ once and fuses it twice, with ``render.rays = full`` (the reference: one ray per
   distribution over all instances of all scenes), instances that lost every point,
 * rays cast by each.
 
-    python scripts/ray_budget_compare.py --scenes 20 [--ray-tile 8] [--json out.json]
+    python scripts/ray_budget_compare.py --scenes 20 [--rays footprint] [--ray-spacing 0.5] [--ray-tile 8] [--json out.json]
 
 CPU seconds of each render (all threads) are printed too: rough, and not a benchmark.
 """
@@ -98,12 +98,15 @@ def main() -> None:
     ap.add_argument("--scenes", type=int, default=20)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--config", default=None, help="a generate config file (default: the built-in defaults)")
-    ap.add_argument("--ray-tile", type=int, default=None, help="render.ray_tile of the adaptive render")
+    ap.add_argument("--ray-tile", type=int, default=None, help="render.ray_tile of the fast render")
+    ap.add_argument("--rays", default="adaptive", choices=["adaptive", "footprint"], help="the fast render's render.rays")
+    ap.add_argument("--ray-spacing", type=float, default=None, help="render.ray_spacing (rays footprint), voxels")
     ap.add_argument("--json", default=None, help="write per-scene results here")
     args = ap.parse_args()
     cfg = load_config(args.config, {"seed": args.seed})
     full = cfg.render.model_copy(update={"rays": "full"})
-    upd = {"rays": "adaptive"} | ({"ray_tile": args.ray_tile} if args.ray_tile else {})
+    upd = ({"rays": args.rays} | ({"ray_tile": args.ray_tile} if args.ray_tile else {})
+           | ({"ray_spacing": args.ray_spacing} if args.ray_spacing else {}))
     fast = cfg.render.model_copy(update=upd)
     fast = type(fast).model_validate(fast.model_dump())
     catalog = open_catalog_for(cfg.assets)
@@ -133,16 +136,16 @@ def main() -> None:
                    cpu_ref=round(out["ref_cpu"], 3), cpu_fast=round(out["fast_cpu"], 3))
         rows.append(row)
         print(f"scene {k:3d}: coverage {row['coverage']:.5f} extra {row['extra']:.5f} "
-              f"labels {row['label_agreement']:.5f} correct {row['label_valid']:.5f} "
-              f"mixed {row['mixed_voxels']:.4f} colours {row['color_agreement']:.5f} "
+              f"labels {row['label_agreement']:.5f} correct {row['label_valid']:.5f} mixed {row['mixed_voxels']:.4f} colours {row['color_agreement']:.5f} "
               f"points {row['voxels_ref']} -> {row['voxels_fast']} instances lost {row['instances_lost']}/"
               f"{row['instances_ref']} rays {row['rays_ref']} -> {row['rays_fast']} "
-              f"({row['rays_fast'] / row['rays_ref']:.3f}) hits {row['hits_ref']} -> {row['hits_fast']} "
-              f"cpu s {row['cpu_ref']} -> {row['cpu_fast']}", flush=True)
+              f"({row['rays_fast'] / row['rays_ref']:.3f}) hits {row['hits_ref']} -> {row['hits_fast']} cpu s {row['cpu_ref']} -> {row['cpu_fast']}", flush=True)
     r = np.asarray(ratios)
-    summary = {"scenes": len(rows), "ray_tile": fast.ray_tile}
-    for key in ("coverage", "extra", "label_agreement", "label_valid", "mixed_voxels", "color_agreement",
-                "voxels_ref", "voxels_fast", "cpu_ref", "cpu_fast"):
+    summary = {"scenes": len(rows), "rays": fast.rays, "ray_tile": fast.ray_tile}
+    if fast.rays == "footprint":
+        summary["ray_spacing"] = fast.ray_spacing
+    for key in ("coverage", "extra", "label_agreement", "label_valid", "mixed_voxels", "color_agreement", "voxels_ref", "voxels_fast", "cpu_ref",
+                "cpu_fast"):
         v = np.asarray([row[key] for row in rows], np.float64)
         summary[key] = {"min": float(v.min()), "mean": float(v.mean()), "max": float(v.max())}
     summary["rays_share"] = float(sum(x["rays_fast"] for x in rows) / sum(x["rays_ref"] for x in rows))

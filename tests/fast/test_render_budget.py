@@ -169,3 +169,43 @@ def test_ray_tile_is_a_power_of_two():
         RenderConfig(ray_tile=12)
     with pytest.raises(ValidationError):
         RenderConfig(rays="half")
+
+
+def test_footprint_samples_the_full_cloud_from_fewer_hits(scene):
+    """rays='footprint': nearly every voxel of the full render from a fraction of its rays and hits,
+    labels from the rays' own triangles; a coarser spacing keeps fewer; same seed, same cloud."""
+    room, mesh = scene
+    full = render_point_cloud(mesh, room, RenderConfig(**SMALL, rays="full"), rng=np.random.default_rng(7))
+    grid = scene_grid(mesh, 0.02)
+    kr = grid.keys(full.sample.coord)
+    adaptive = render_point_cloud(mesh, room, RenderConfig(**SMALL, rays="adaptive"), rng=np.random.default_rng(7))
+    runs = {}
+    for spacing in (0.5, 2.0):
+        cfg = RenderConfig(**SMALL, rays="footprint", ray_spacing=spacing)
+        fast = render_point_cloud(mesh, room, cfg, rng=np.random.default_rng(7))
+        kf = grid.keys(fast.sample.coord)
+        common = np.intersect1d(kr, kf, assume_unique=True)
+        runs[spacing] = (len(common) / len(kr), fast)
+        assert fast.stats["ray_budget"] == "footprint" and fast.stats["ray_spacing"] == spacing
+        # every point's label is the triangle its ray hit: the instance of the re-cast point agrees
+        assert set(np.unique(fast.sample.instance)) <= set(np.unique(full.sample.instance))
+    cover, fast = runs[0.5]
+    assert cover >= 0.99
+    assert fast.stats["raw_hits"] < 0.9 * adaptive.stats["raw_hits"]  # (coarse 160 x 120 views: few to spare)
+    assert fast.stats["rays_cast"] < 1.1 * adaptive.stats["rays_cast"]  # 160 x 120: a flat tile's edges get cast
+    # 2 voxels apart is too coarse to fill every voxel, and casts fewer rays still
+    assert runs[2.0][0] < cover and runs[2.0][1].stats["rays_cast"] < fast.stats["rays_cast"]
+    again = render_point_cloud(mesh, room, RenderConfig(**SMALL, rays="footprint", ray_spacing=0.5, threads=1),
+                               rng=np.random.default_rng(7))
+    np.testing.assert_array_equal(again.sample.coord, fast.sample.coord)
+    np.testing.assert_array_equal(again.sample.instance, fast.sample.instance)
+
+
+def test_footprint_renders_whole_views_where_they_are_needed(scene):
+    """Depth-sensor options see neighbouring pixels: with them footprint renders as adaptive, and says so."""
+    room, mesh = scene
+    kw = dict(SMALL, edge_dropout=0.05)
+    a = render_point_cloud(mesh, room, RenderConfig(**kw, rays="adaptive"), rng=np.random.default_rng(7))
+    f = render_point_cloud(mesh, room, RenderConfig(**kw, rays="footprint"), rng=np.random.default_rng(7))
+    np.testing.assert_array_equal(a.sample.coord, f.sample.coord)
+    assert f.stats["ray_budget"] == "adaptive" and "ray_spacing" not in f.stats

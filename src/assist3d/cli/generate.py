@@ -62,8 +62,8 @@ def _summary_table(run, console) -> None:
 
 def _check_rays(rays: str | None) -> None:
     """``--rays``: None (the configuration's) or one of render.rays' values."""
-    if rays not in (None, "full", "adaptive"):
-        raise typer.BadParameter(f"{rays!r}: expected full or adaptive", param_hint="--rays")
+    if rays not in (None, "full", "adaptive", "footprint"):
+        raise typer.BadParameter(f"{rays!r}: expected full, adaptive or footprint", param_hint="--rays")
 
 
 def register(app: typer.Typer) -> None:
@@ -100,8 +100,10 @@ def register(app: typer.Typer) -> None:
                                                   "ray://HOST:PORT (default: Ray's discovery, else a new local "
                                                   "Ray)."),
         rays: Optional[str] = typer.Option(None, "--rays", help="render.rays: 'adaptive' (the ray budget, the "
-                                           "default) or 'full' (one ray per pixel: the reference, and the bytes of "
-                                           "versions before the budget became the default)."),
+                                           "default), 'footprint' (the ray budget, stopped where the kept pixels "
+                                           "already sample every surface half a voxel apart) or 'full' (one ray per "
+                                           "pixel: the reference, and the bytes of versions before the budget became "
+                                           "the default)."),
     ) -> None:
         """Generate a dataset: one Pointcept-layout folder per scene plus manifest.json."""
         from ..pipeline import generate_dataset
@@ -199,8 +201,9 @@ def register(app: typer.Typer) -> None:
         seed: int = typer.Option(0, "--seed", min=0, max=MAX_SEED, help="Global seed of the benchmark scenes."),
         keep: Optional[Path] = typer.Option(None, "--keep", help="Write the scenes here instead of a temp folder."),
         as_json: bool = typer.Option(False, "--json", help="Print JSON only."),
-        rays: Optional[str] = typer.Option(None, "--rays", help="render.rays: 'adaptive' (the ray budget, the default) "
-                                                "or 'full' (one ray per pixel, the reference)."),
+        rays: Optional[str] = typer.Option(None, "--rays", help="render.rays: 'adaptive' (the ray budget, the default), "
+                                                "'footprint' (sampled half a voxel apart) or 'full' (one ray per "
+                                                "pixel, the reference)."),
     ) -> None:
         """Time the generator at paper settings (one worker): seconds per stage and peak memory."""
         from ..pipeline import run_benchmark

@@ -178,16 +178,23 @@ class RenderConfig(Section):
     cx: float | None = Field(None, description="Principal point x, px; None = (width - 1) / 2.")
     cy: float | None = Field(None, description="Principal point y, px; None = (height - 1) / 2.")
     threads: int = Field(2, ge=1, le=256, description="Ray-casting threads, at most 256.")
-    rays: Literal["full", "adaptive"] = Field(
+    rays: Literal["full", "adaptive", "footprint"] = Field(
         "adaptive", description="Which rays a view casts: 'adaptive' (the default) = a lattice of every ray_tile-th "
                                 "pixel, refined only where a tile's corner rays hit different triangles (edges, "
                                 "the open sky); the other pixels' depths come from their triangle's plane, so the "
                                 "view's pixels, and the points and labels fused from them, are those of the full "
                                 "render up to rounding (docs/generation.md, 'Ray budget'); 'full' = one ray per "
                                 "pixel (the reference, and the bytes of versions before the budget was the "
-                                "default; a dataset whose config lacks the key was made with it).")
-    ray_tile: int = Field(8, ge=1, le=64, description="rays='adaptive': lattice stride of the first pass, px, a "
-                                                      "power of two at most 64 (1 = every pixel).")
+                                "default; a dataset whose config lacks the key was made with it); 'footprint' = "
+                                "the adaptive lattice, stopped wherever it already samples every surface a tile "
+                                "sees at most ray_spacing voxels apart, the pixels between left out (far fewer "
+                                "rays and hits for almost the same occupied voxels; with depth-sensor options or "
+                                "point_source 'tsdf', which need whole images, it renders as 'adaptive').")
+    ray_tile: int = Field(8, ge=1, le=64, description="rays='adaptive' or 'footprint': lattice stride of the first "
+                                                      "pass, px, a power of two at most 64 (1 = every pixel).")
+    ray_spacing: float = Field(0.5, gt=0, le=4, description="rays='footprint': the largest distance between the "
+                                                            "surface points of neighbouring kept pixels, in voxels "
+                                                            "(0.5 = 1 cm at 2 cm voxels).")
     voxel_size: float = Field(0.02, ge=0.001, le=1, description="Voxel downsampling size, m, 0.001..1 (paper: voxel "
                                                                 "downsampling; "
                                                       "ScanNet-like 2 cm).")

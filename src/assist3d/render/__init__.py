@@ -18,7 +18,7 @@ import numpy as np
 from ..config import RenderConfig
 from ..core.contracts import PointSample, Room, SceneMesh
 from .camera import vantage_cameras
-from .fusion import FusedHits, cast_and_fuse, scene_grid
+from .fusion import FusedHits, cast_and_fuse, footprint_spacing, scene_grid
 from .meshsample import nearest_instance, sample_surface
 from .raycast import BACKENDS, RayCaster, make_caster
 from .rgbd import face_normals, oriented_normals, render_view, shade
@@ -107,7 +107,11 @@ def render_point_cloud(scene: SceneMesh, room: Room, cfg: RenderConfig, *, rng: 
              "raw_hits": hits.raw_hits, "rendered_points": rendered_points, "points": len(sample),
              "point_source": cfg.point_source, "labels": cfg.labels, "backend": cfg.backend, **extra}
     if cfg.rays != "full":  # the full render's record stays as it was
-        stats.update(ray_budget=cfg.rays, ray_tile=cfg.ray_tile, rays_cast=hits.rays_cast)
+        spacing = footprint_spacing(cfg, integrator)
+        stats.update(ray_budget="adaptive" if spacing is None else "footprint", ray_tile=cfg.ray_tile,
+                     rays_cast=hits.rays_cast)
+        if spacing is not None:
+            stats.update(ray_spacing=cfg.ray_spacing)
     log.debug("render %s: %s", scene_id, stats)
     return RenderResult(sample, centers, hits.pixel_counts, timings, stats)
 

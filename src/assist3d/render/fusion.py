@@ -29,7 +29,7 @@ from .voxel import VoxelGrid, pick_one_per_voxel, pick_one_per_voxel_scan
 
 log = logging.getLogger(__name__)
 
-__all__ = ["FusedHits", "ViewSink", "cast_and_fuse", "scene_grid"]
+__all__ = ["FusedHits", "ViewSink", "cast_and_fuse", "footprint_spacing", "scene_grid"]
 
 
 class ViewSink(Protocol):
@@ -63,6 +63,14 @@ class FusedHits:
     seconds_cast: float
     seconds_merge: float
     rays_cast: int = 0
+
+
+def footprint_spacing(cfg: RenderConfig, sink: ViewSink | None = None) -> float | None:
+    """The sampling distance (m) of ``render.rays = "footprint"``, or None where views are rendered whole:
+    another ray mode, or depth-sensor options / a view sink (TSDF), which need every pixel."""
+    if cfg.rays != "footprint" or sink is not None or sensor_enabled(cfg):
+        return None
+    return float(cfg.ray_spacing) * float(cfg.voxel_size)
 
 
 def scene_grid(scene: SceneMesh, voxel_size: float) -> VoxelGrid:
@@ -105,16 +113,17 @@ def cast_and_fuse(scene: SceneMesh, caster: RayCaster, cameras: list[Camera], cf
     sensor_seeds = rng.integers(0, 2**63, size=len(cameras))
     realism = sensor_enabled(cfg)
     planes = sky = None
-    if cfg.rays == "adaptive":  # misses are cast again against a sky box (budget.py): flat tiles too
+    if cfg.rays != "full":  # misses are cast again against a sky box (budget.py): flat tiles too
         planes = face_planes(scene, sky=True)
         sky = make_caster(cfg.backend, *sky_box(scene))
+    spacing = footprint_spacing(cfg, sink)
 
     def one_view(i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, Any, int]:
         cam = cameras[i]
         dirs = rotate_directions(cam_dirs, cam.pose)
         center = cam.pose[:3, 3].astype(np.float32)
         if planes is not None:
-            t, face, n_cast = cast_adaptive(caster, planes, cam, dirs, cfg.ray_tile, sky)
+            t, face, n_cast = cast_adaptive(caster, planes, cam, dirs, cfg.ray_tile, sky, spacing)
         else:
             origins = np.zeros_like(dirs)
             for j in range(3):
