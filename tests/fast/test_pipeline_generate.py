@@ -288,13 +288,13 @@ def test_filled_openings_are_labelled_objects_and_change_nothing_else(full_run, 
 
 
 def test_rays_option_picks_the_render(tmp_path):
-    """`generate --rays full` renders one ray per pixel (the reference), the default the ray budget;
-    `bench --rays` the same; anything else is one clear error."""
+    """`generate --rays full` renders one ray per pixel (the reference), the default the ray budget,
+    `--rays footprint` the sampled render; `bench --rays` the same; anything else is one clear error."""
     cfg_file = tmp_path / "tiny.yaml"
     cfg_file.write_text(yaml.safe_dump(TINY))
     runner = CliRunner()
     metas = {}
-    for rays in ("full", None):
+    for rays in ("full", None, "footprint"):
         out = tmp_path / str(rays)
         args = ["generate", "--out", str(out), "--only", "0", "--config", str(cfg_file), "--json"]
         res = runner.invoke(app, args + (["--rays", rays] if rays else []))
@@ -302,7 +302,8 @@ def test_rays_option_picks_the_render(tmp_path):
         metas[rays] = json.loads((out / "scene_000000" / "meta.json").read_text())["render"]
     assert "ray_budget" not in metas["full"] and metas[None]["ray_budget"] == "adaptive"
     assert metas[None]["rays_cast"] < metas["full"]["rays"] == metas[None]["rays"]
+    assert metas["footprint"]["ray_budget"] == "footprint" and metas["footprint"]["ray_spacing"] == 0.5
     res = runner.invoke(app, ["generate", "--out", str(tmp_path / "x"), "--rays", "half"])
-    assert res.exit_code != 0 and "expected full or adaptive" in res.output
+    assert res.exit_code != 0 and "expected full, adaptive or footprint" in res.output
     assert not (tmp_path / "x").exists()
     assert run_benchmark(scenes=1, cfg=parse_config(TINY), rays="full")["settings"]["rays"] == "full"

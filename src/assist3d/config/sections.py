@@ -193,8 +193,8 @@ class RenderConfig(Section):
     ray_tile: int = Field(8, ge=1, le=64, description="rays='adaptive' or 'footprint': lattice stride of the first "
                                                       "pass, px, a power of two at most 64 (1 = every pixel).")
     ray_spacing: float = Field(0.5, gt=0, le=4, description="rays='footprint': the largest distance between the "
-                                                            "surface points of neighbouring kept pixels, in voxels "
-                                                            "(0.5 = 1 cm at 2 cm voxels).")
+                                                            "surface points of neighbouring kept pixels, in voxels, "
+                                                            "above 0 and at most 4 (0.5 = 1 cm at 2 cm voxels).")
     voxel_size: float = Field(0.02, ge=0.001, le=1, description="Voxel downsampling size, m, 0.001..1 (paper: voxel "
                                                                 "downsampling; "
                                                       "ScanNet-like 2 cm).")
