@@ -22,8 +22,9 @@ from assist3d.data import open_dataset  # noqa: E402
 from assist3d.learn.engine.toy import make_toy_scene  # noqa: E402
 from assist3d.core.errors import ConfigError, DataError, FaultError  # noqa: E402
 from assist3d.bench.evaluation.ap import match_scene, summarize  # noqa: E402
-from assist3d.learn.models.sparse import SparseSceneNorm, sparse_tensor  # noqa: E402
+from assist3d.learn.models.sparse import SparseSceneNorm, resolve_precision, sparse_tensor  # noqa: E402
 from assist3d.pipeline import generate_dataset  # noqa: E402
+from assist3d.learn.segmenter import probe as probe_mod  # noqa: E402
 from assist3d.learn.segmenter import train as train_mod  # noqa: E402
 from assist3d.learn.segmenter.checkpoint import (  # noqa: E402
     INT8_BLOCK, dequantize_int8, load_segmenter, load_segmenters, quantize_int8, save_segmenter)
@@ -224,6 +225,27 @@ def test_resumed_training_equals_an_uninterrupted_run(tiny_scenes, tmp_path, mon
     log_cut = (tmp_path / "cut" / "train_log.csv").read_text().splitlines()
     assert [r.split(",")[0] for r in log_cut] == ["step", "1", "2", "3", "4"]
     assert [r.split(",")[3:] for r in log_cut] == [r.split(",")[3:] for r in log_full]  # same losses
+
+
+def test_a_run_resumed_in_another_precision_records_both(tiny_scenes, tmp_path, monkeypatch, one_thread, caplog):
+    """optim.precision auto follows the CPU, so a run resumed on another machine may change precision
+    mid-way: its checkpoint and the probe's row must name both, never only the last."""
+    cfg = parse_segmenter_config(TINY_NET)
+    monkeypatch.setattr(train_mod, "resolve_precision", lambda name, device: "float32")
+    train_segmenter(cfg, tiny_scenes, tmp_path / "run", seed=0, budget=Budget(steps=1))
+    first = load_segmenter(tmp_path / "run" / "last.pt").progress
+    assert first["precision"] == "float32" and first["precisions"] == ["float32"]
+    monkeypatch.setattr(train_mod, "resolve_precision", lambda name, device: "bfloat16")
+    with caplog.at_level("WARNING"):
+        train_segmenter(cfg, tiny_scenes, tmp_path / "run", seed=0, budget=Budget(steps=2))
+    loaded = load_segmenter(tmp_path / "run" / "last.pt")
+    assert loaded.progress["step"] == 2 and loaded.progress["precisions"] == ["bfloat16", "float32"]
+    assert "continues in bfloat16" in caplog.text
+    metrics = {k: 0.0 for k in ("AP", "AP50", "AP25", "AR", "AR50", "AR25")} | {
+        "ci95": {}, "per_scene": {}, "predict_seconds": 0.0}
+    assert probe_mod._run_row(0, metrics, loaded.meta)["precision"] == "bfloat16+float32"
+    assert probe_mod._run_row(0, metrics, {"precision": "float32"})["precision"] == "float32"  # older checkpoints
+    assert probe_mod._run_row(0, metrics, {})["precision"] is None
 
 
 @pytest.mark.slow
@@ -558,6 +580,7 @@ def test_probe_runs_end_to_end_writes_the_json_contract_and_resumes(tiny_data, t
     for run in data["runs"]:
         assert {"AP", "AP50", "AP25", "AR", "train_seconds", "steps"} <= set(run)
         assert run["steps"] == 2 and run["train_seconds"] > 0
+        assert run["precision"] == resolve_precision(TINY_NET["optim"].get("precision", "auto"), "cpu")
     for k in ("AP", "AP50", "AP25", "AR"):
         vals = [run[k] for run in data["runs"]]
         assert data["mean"][k] == pytest.approx(np.mean(vals), abs=1e-6)

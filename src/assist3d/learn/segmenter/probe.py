@@ -25,6 +25,10 @@ defaults of the code that ran); figures made with other settings are recomputed,
 summary holds ``hybrid`` whenever every seed has figures for today's settings, with or without
 ``hybrid=True``.
 
+Each seed's row names the precision its training steps computed in (``precision``: ``optim.precision:
+auto`` is bfloat16 on CPUs that multiply it natively and float32 elsewhere, so the same command differs
+between machines; ``bfloat16+float32`` for a seed resumed across both).
+
 Metrics are pooled over all evaluation scenes like the benchmark; the bootstrap interval resamples
 scenes with replacement (1,000 draws, 2.5th to 97.5th percentile).
 """
@@ -328,9 +332,14 @@ def summarise_runs(runs: list[dict]) -> dict:
 
 
 def _run_row(seed: int, metrics: dict, meta: dict) -> dict:
-    """One seed's figures as written to result.json (and to ``runs`` of the summary)."""
+    """One seed's figures as written to result.json (and to ``runs`` of the summary). ``precision``: what
+    its training steps computed in (``optim.precision: auto`` follows the CPU, so the same command trains
+    in bfloat16 on one machine and float32 on another; ``bfloat16+float32`` for a run resumed across
+    both; None where the model does not say)."""
+    used = meta.get("precisions") or ([meta["precision"]] if meta.get("precision") else [])
     return {"seed": seed, **{k: metrics[k] for k in RUN_KEYS}, "AR50": metrics["AR50"], "AR25": metrics["AR25"],
             "train_seconds": round(float(meta.get("train_seconds", 0.0)), 1), "steps": int(meta.get("step", 0)),
+            "precision": "+".join(sorted(map(str, used))) or None,
             "ci95": metrics["ci95"], "per_scene": metrics["per_scene"], "predict_seconds": metrics["predict_seconds"]}
 
 
@@ -507,7 +516,8 @@ def _with_hybrid(run: dict, sdir: Path, req: ProbeRequest, seed: int, emit: Call
     metrics = evaluate_model(model_path, req.eval, sdir / "pred_hybrid", method="hybrid",
                              on_scene=lambda k, n: emit("eval", {"seed": seed, "done": k, "total": n,
                                                                  "method": "hybrid"}))
-    row = _run_row(seed, metrics, {"train_seconds": run["train_seconds"], "step": run["steps"]})
+    row = _run_row(seed, metrics, {"train_seconds": run["train_seconds"], "step": run["steps"]}
+                   | ({"precision": run["precision"]} if run.get("precision") else {}))
     run = {**run, "hybrid": {**row, "inference": settings}}
     write_json_atomic(sdir / "result.json", run)
     return run

@@ -124,6 +124,7 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
     ema_hook = EMAHook(model, cfg.optim.ema_decay) if cfg.optim.ema_decay > 0 else None
     trainer = Trainer(model, opt, lambda m, examples: example_loss(m, examples, cfg, device),
                       lr_at=lambda t: _lr(cfg, budget.progress(t.steps, t.seconds)), grad_clip=5.0, check_finite=True)
+    precisions = [precision]  # every precision the run's steps were taken in (a resume may change machines)
     if last.is_file():
         loaded = load_segmenter(last, device, weights="live")
         if loaded.config != cfg:
@@ -138,6 +139,11 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
         trainer.steps = int(loaded.progress.get("step", 0))
         trainer.seconds = float(loaded.progress.get("train_seconds", 0.0))
         trainer.last_loss = float(loaded.progress.get("loss", float("nan")))
+        before = _precisions_of(loaded.progress)
+        if before and precision not in before:
+            log.warning("%s: trained so far in %s, continues in %s (optim.precision %s follows this machine's "
+                        "CPU); its record names both", last, "+".join(before), precision, cfg.optim.precision)
+        precisions = sorted({*before, precision})
         log.info("resumed %s at step %d (%.0f s trained)", last, trainer.steps, trainer.seconds)
     meta = dict(meta or {})
     csv_log = CsvLog(out / "train_log.csv", LOG_FIELDS)
@@ -147,7 +153,7 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
 
     def save(t: Trainer) -> None:
         progress = {"step": t.steps, "train_seconds": t.seconds, "loss": t.last_loss, "seed": seed,
-                    "budget": budget.as_dict(), "precision": precision}
+                    "budget": budget.as_dict(), "precision": precision, "precisions": precisions}
         save_segmenter(last, model, cfg, meta={**meta, **progress}, optimizer=opt, progress=progress,
                        ema=ema_hook.ema if ema_hook is not None else None)
         log_all(sinks, rows.pending)  # rows reach the logs only with the checkpoint that covers them
@@ -164,6 +170,15 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
         close_all(sinks)
 
     return TrainRecord(steps=trainer.steps, train_seconds=trainer.seconds, last_loss=trainer.last_loss, checkpoint=last)
+
+
+def _precisions_of(progress: dict) -> list[str]:
+    """The precisions a checkpoint's steps were taken in: ``precisions``, else (checkpoints from before that
+    key) its one ``precision``, else (from before precision existed) none known."""
+    got = progress.get("precisions")
+    if isinstance(got, list):
+        return sorted(str(p) for p in got)
+    return [str(progress["precision"])] if "precision" in progress else []
 
 
 class _PendingRows(Hook):
