@@ -708,6 +708,7 @@ def test_probe_hybrid_scores_segment_default_and_is_added_to_a_finished_folder(t
     assert again["hybrid"] == h and again["runs"] == data["runs"]
     table = probe("--seeds", "2", "--hybrid")
     assert "mean ± std hybrid" in table and "1 hybrid" in table
+    assert "precision" in table and data["runs"][0]["precision"] in table  # the seeds' training precision is shown
     assert (out / "seed_1" / "pred_hybrid" / f"{ds.scene_ids[0]}.npz").stat().st_mtime_ns == pred_stamp
     # figures written before an option existed (its key missing) stay valid: options keep the old
     # behaviour by default; so do figures that stored a since retired option switched off

@@ -169,7 +169,9 @@ def probe_cmd(
                               f"AP25 {_fmt(info['AP25'])}  AR {_fmt(info['AR'])}"
                               + (f"  hybrid AP50 {_fmt(h['AP50'])}" if h else "")
                               + f"  ({info['steps']} steps, "
-                              f"{info['train_seconds'] / 60:.1f} min{', cached' if info.get('cached') else ''})")
+                              f"{info['train_seconds'] / 60:.1f} min"
+                              + (f", {info['precision']}" if info.get("precision") else "")
+                              + f"{', cached' if info.get('cached') else ''})")
 
         if jobs > 1:
             summary = run_probe_jobs(req, out, jobs=jobs, device=resolve_device(device), loader_workers=loader_workers,
@@ -181,7 +183,7 @@ def probe_cmd(
         typer.echo(json.dumps({k: summary[k] for k in ("runs", "mean", "std", "hybrid") if k in summary}, indent=1))
         return
     table = Table(title=f"probe: {', '.join(train)} -> {', '.join(eval_)}")
-    for col in ("seed", "AP", "AP50 [95% CI]", "AP25", "AR", "steps", "minutes"):
+    for col in ("seed", "AP", "AP50 [95% CI]", "AP25", "AR", "steps", "minutes", "precision"):
         table.add_column(col, justify="right")
     for label, part in (("", summary), (" hybrid", summary.get("hybrid"))):
         if part is None:
@@ -192,10 +194,10 @@ def probe_cmd(
             ci = r.get("ci95", {}).get("AP50")
             ci_s = f" [{ci[0]:.3f}, {ci[1]:.3f}]" if ci else ""
             table.add_row(f"{r['seed']}{label}", _fmt(r["AP"]), _fmt(r["AP50"]) + ci_s, _fmt(r["AP25"]), _fmt(r["AR"]),
-                          str(r["steps"]), f"{r['train_seconds'] / 60:.1f}")
+                          str(r["steps"]), f"{r['train_seconds'] / 60:.1f}", r.get("precision") or "-")
         m, s = part["mean"], part["std"]
         table.add_row(f"mean ± std{label}", *(f"{_fmt(m[k])} ± {_fmt(s[k])}" for k in ("AP", "AP50", "AP25", "AR")),
-                      f"{m['steps']:.0f}" if m["steps"] is not None else "-", "")
+                      f"{m['steps']:.0f}" if m["steps"] is not None else "-", "", "")
     Console().print(table)
 
 
