@@ -27,8 +27,7 @@ neighbouring pixels (the derivative of the hit point on the hit triangle's plane
 says how coarse a lattice still samples what the tile sees at most ``spacing`` apart. A flat tile
 keeps only that sub-lattice (from its plane), a tile whose corners hit different triangles of the
 scene closes as soon as its corners are that close, and the pixels between are left out (misses).
-At half a voxel this fills 99.3-99.8 % of the full render's voxels from 15 % of its rays and 40 % of
-its pixel hits (docs/generation.md, ``experiments/footprint-2026-12-07``).
+How much of the full render's data it keeps, and for how many rays: docs/generation.md.
 """
 
 from __future__ import annotations

@@ -64,7 +64,7 @@ from .loader import mix_probabilities
 from .pack import ScenePack, temporary_pack
 from .predictor import STEPS, Predictor
 from .superpoints import SuperpointConfig
-from .train import Budget, train_segmenter
+from .train import Budget, precisions_of, train_segmenter
 
 log = logging.getLogger(__name__)
 
@@ -336,10 +336,10 @@ def _run_row(seed: int, metrics: dict, meta: dict) -> dict:
     its training steps computed in (``optim.precision: auto`` follows the CPU, so the same command trains
     in bfloat16 on one machine and float32 on another; ``bfloat16+float32`` for a run resumed across
     both; None where the model does not say)."""
-    used = meta.get("precisions") or ([meta["precision"]] if meta.get("precision") else [])
+    used = precisions_of(meta)
     return {"seed": seed, **{k: metrics[k] for k in RUN_KEYS}, "AR50": metrics["AR50"], "AR25": metrics["AR25"],
             "train_seconds": round(float(meta.get("train_seconds", 0.0)), 1), "steps": int(meta.get("step", 0)),
-            "precision": "+".join(sorted(map(str, used))) or None,
+            "precision": "+".join(used) or None,
             "ci95": metrics["ci95"], "per_scene": metrics["per_scene"], "predict_seconds": metrics["predict_seconds"]}
 
 

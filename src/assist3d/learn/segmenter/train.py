@@ -139,7 +139,7 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
         trainer.steps = int(loaded.progress.get("step", 0))
         trainer.seconds = float(loaded.progress.get("train_seconds", 0.0))
         trainer.last_loss = float(loaded.progress.get("loss", float("nan")))
-        before = _precisions_of(loaded.progress)
+        before = precisions_of(loaded.progress)
         if before and precision not in before:
             log.warning("%s: trained so far in %s, continues in %s (optim.precision %s follows this machine's "
                         "CPU); its record names both", last, "+".join(before), precision, cfg.optim.precision)
@@ -172,13 +172,13 @@ def train_segmenter(cfg: SegmenterConfig, scenes: Sequence[Scene], out_dir: str 
     return TrainRecord(steps=trainer.steps, train_seconds=trainer.seconds, last_loss=trainer.last_loss, checkpoint=last)
 
 
-def _precisions_of(progress: dict) -> list[str]:
-    """The precisions a checkpoint's steps were taken in: ``precisions``, else (checkpoints from before that
-    key) its one ``precision``, else (from before precision existed) none known."""
+def precisions_of(progress: dict) -> list[str]:
+    """The precisions a checkpoint's steps were taken in (its ``progress`` or meta): ``precisions``, else
+    (checkpoints from before that key) its one ``precision``, else (from before precision existed) none known."""
     got = progress.get("precisions")
     if isinstance(got, list):
         return sorted(str(p) for p in got)
-    return [str(progress["precision"])] if "precision" in progress else []
+    return [str(progress["precision"])] if progress.get("precision") else []
 
 
 class _PendingRows(Hook):
