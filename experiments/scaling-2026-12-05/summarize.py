@@ -133,13 +133,26 @@ def main() -> None:
             panel.minorticks_off()
             panel.set_xlabel(label)
             panel.grid(alpha=0.3)
+        # other scene counts measured at two or more step counts: their learned steps curve, lighter, on the left
+        for scenes in sorted({r[1] for r in rows} - {250}):
+            pts = sorted((r for r in rows if r[1] == scenes), key=lambda r: r[0])
+            if len(pts) < 2:
+                continue
+            ax.plot([r[0] for r in pts], [r[3]["learned"][0] for r in pts], "--s", color="tab:green", ms=4,
+                    label=f"learned, {scenes:,} scenes")
+            ax.set_xlabel("training steps (batch 2); 250 scenes unless the legend names another count")
+            for r in pts:
+                ax.scatter([r[0]] * len(r[3]["learned"][2]), r[3]["learned"][2], color="tab:green", s=10, alpha=0.5)
+                if r[2] < 2:
+                    ax.annotate("one seed", (r[0], r[3]["learned"][0]), textcoords="offset points",
+                                xytext=(4, -12), fontsize=7)
         ax.set_ylabel("AP50, mean over 6 real rooms")
         ax.set_title("against training steps", fontsize=10)
         bx.set_title("against training scenes", fontsize=10)
         fig.suptitle("Real-scan AP50 of the segmenter trained on ASSIST-3D data (dots: seeds)", fontsize=10)
         ax.legend(fontsize=7)
         if any(r[1] == 2000 for r in rows):  # the point's two deviations (plan.md)
-            bx.text(0.98, 0.03, "2,000 scenes: ray-budget render, float32 training (plan.md)", transform=bx.transAxes,
+            bx.text(0.98, 0.03, "2,000 scenes: ray-budget render; at 2,000 steps float32 (plan.md)", transform=bx.transAxes,
                     ha="right", va="bottom", fontsize=7)
         fig.tight_layout()
         a.plot.parent.mkdir(parents=True, exist_ok=True)
