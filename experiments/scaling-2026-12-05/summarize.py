@@ -111,23 +111,28 @@ def main() -> None:
         # left: against steps at 250 scenes (the steps curve); right: against scenes at 2,000 steps
         fig, (ax, bx) = plt.subplots(1, 2, figsize=(10.0, 4.0), dpi=120, sharey=True)
         kinds = (("learned", "tab:blue"), ("hybrid", "tab:orange"))
+
+        def curve(panel, pts, vary: int, kind: str, colour: str, fmt: str, label: str, **style) -> None:
+            """The mean over seeds as a line, each seed as a dot."""
+            panel.plot([r[vary] for r in pts], [r[3][kind][0] for r in pts], fmt, color=colour, label=label, **style)
+            for r in pts:
+                panel.scatter([r[vary]] * len(r[3][kind][2]), r[3][kind][2], color=colour, s=10, alpha=0.5)
+
+        def mark_one_seed(panel, pts, vary: int) -> None:
+            for r in pts:
+                if r[2] < 2:
+                    panel.annotate("one seed", (r[vary], r[3]["learned"][0]), textcoords="offset points",
+                                   xytext=(4, -12), fontsize=7)
+
         for panel, fixed, vary, label in ((ax, (1, 250), 0, "training steps (batch 2), 250 scenes"),
                                           (bx, (0, 2000), 1, "generated training scenes, 2,000 steps")):
             pts_all = sorted((r for r in rows if r[fixed[0]] == fixed[1]), key=lambda r: r[vary])
             for kind, colour in kinds:
-                xs = [r[vary] for r in pts_all]
-                panel.plot(xs, [r[3][kind][0] for r in pts_all], "-o", color=colour,
-                           label=f"{kind}, mean of seeds")
-                for r in pts_all:
-                    v = r[3][kind][2]
-                    panel.scatter([r[vary]] * len(v), v, color=colour, s=10, alpha=0.5)
+                curve(panel, pts_all, vary, kind, colour, "-o", f"{kind}, mean of seeds")
                 if shipped.exists():
                     panel.axhline(ship_cells[kind][0], color=colour, ls=":", lw=1,
                                   label=f"model v1 (shipped before), {kind}")
-            for r in pts_all:
-                if r[2] < 2:
-                    panel.annotate("one seed", (r[vary], r[3]["learned"][0]), textcoords="offset points",
-                                   xytext=(4, -12), fontsize=7)
+            mark_one_seed(panel, pts_all, vary)
             panel.set_xscale("log")
             panel.set_xticks([r[vary] for r in pts_all], [str(r[vary]) for r in pts_all])
             panel.minorticks_off()
@@ -138,14 +143,9 @@ def main() -> None:
             pts = sorted((r for r in rows if r[1] == scenes), key=lambda r: r[0])
             if len(pts) < 2:
                 continue
-            ax.plot([r[0] for r in pts], [r[3]["learned"][0] for r in pts], "--s", color="tab:green", ms=4,
-                    label=f"learned, {scenes:,} scenes")
+            curve(ax, pts, 0, "learned", "tab:green", "--s", f"learned, {scenes:,} scenes", ms=4)
+            mark_one_seed(ax, pts, 0)
             ax.set_xlabel("training steps (batch 2); 250 scenes unless the legend names another count")
-            for r in pts:
-                ax.scatter([r[0]] * len(r[3]["learned"][2]), r[3]["learned"][2], color="tab:green", s=10, alpha=0.5)
-                if r[2] < 2:
-                    ax.annotate("one seed", (r[0], r[3]["learned"][0]), textcoords="offset points",
-                                xytext=(4, -12), fontsize=7)
         ax.set_ylabel("AP50, mean over 6 real rooms")
         ax.set_title("against training steps", fontsize=10)
         bx.set_title("against training scenes", fontsize=10)
