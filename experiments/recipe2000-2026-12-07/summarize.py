@@ -10,25 +10,20 @@ from __future__ import annotations
 
 import argparse
 import json
-import random
 import shutil
 import statistics
 from pathlib import Path
+
+from assist3d.bench.evaluation.compare import paired_comparison, room_means
 
 HERE = Path(__file__).resolve().parent
 SYNTH = HERE.parent / "scaling-2026-12-05" / "per_seed"
 ROOMS = ("scene0006", "scene0007", "scene0008", "scene0009", "scene0010", "scene0451")
 
 
-def room_of(scan: str) -> str:
-    return "scene0451" if "scene0451" in scan else scan[:9]
-
-
-def rooms(per_scene: dict) -> dict[str, list[float]]:
-    out: dict[str, list[float]] = {}
-    for scan, fig in per_scene.items():
-        out.setdefault(room_of(scan), []).append(fig["AP50"])
-    return out
+def rooms(per_scene: dict) -> dict[str, float]:
+    """AP50 per room (the mean of its scans) of a probe's ``per_scene``."""
+    return room_means({scan: fig["AP50"] for scan, fig in per_scene.items()})
 
 
 def mix_rooms(kind: str) -> dict[str, float]:
@@ -37,8 +32,8 @@ def mix_rooms(kind: str) -> dict[str, float]:
     for fold in ("A", "B"):
         res = json.loads((HERE / "per_seed" / f"mix-{fold}-seed_0.json").read_text())
         per = res["per_scene"] if kind == "learned" else res["hybrid"]["per_scene"]
-        for room, figs in rooms(per).items():
-            got.setdefault(room, []).append(statistics.mean(figs))
+        for room, fig in rooms(per).items():
+            got.setdefault(room, []).append(fig)
     return {r: statistics.mean(v) for r, v in got.items()}
 
 
@@ -48,15 +43,9 @@ def synth_rooms(kind: str) -> tuple[dict[str, float], float]:
     for k in (0, 1):
         res = json.loads((SYNTH / f"probe-s250-t2000-seed_{k}.json").read_text())
         per = res["per_scene"] if kind == "learned" else res["hybrid"]["per_scene"]
-        per_seed.append({r: statistics.mean(v) for r, v in rooms(per).items()})
+        per_seed.append(rooms(per))
     spread = statistics.stdev([statistics.mean(s[r] for r in ROOMS) for s in per_seed])
     return {r: statistics.mean(s[r] for s in per_seed) for r in ROOMS}, spread
-
-
-def interval(diffs: list[float], n: int = 10000) -> tuple[float, float]:
-    rng = random.Random(0)
-    means = sorted(statistics.mean(rng.choices(diffs, k=len(diffs))) for _ in range(n))
-    return means[int(0.025 * n)], means[int(0.975 * n) - 1]
 
 
 def main() -> None:
@@ -72,10 +61,9 @@ def main() -> None:
     for kind in ("learned", "hybrid"):
         mix = mix_rooms(kind)
         synth, spread = synth_rooms(kind)
-        diffs = [mix[r] - synth[r] for r in ROOMS]
-        d = statistics.mean(diffs)
-        ahead, behind = sum(x > 0 for x in diffs), sum(x < 0 for x in diffs)
-        lo, hi = interval(diffs)
+        # one figure a room on each side, so the rooms are what the bootstrap resamples and each weighs the same
+        c = paired_comparison({r: synth[r] for r in ROOMS}, {r: mix[r] for r in ROOMS})
+        d, (lo, hi), ahead, behind = c.mean_diff, c.ci95, c.higher, c.lower
         print(f"{kind} AP50, 6-room mean: mix {statistics.mean(mix[r] for r in ROOMS):.3f} (one seed), "
               f"synth {statistics.mean(synth[r] for r in ROOMS):.3f} (seed spread {spread:.3f})")
         print("  per room, mix / synth: " + ", ".join(f"{r} {mix[r]:.3f}/{synth[r]:.3f}" for r in ROOMS))

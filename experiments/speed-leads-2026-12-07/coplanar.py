@@ -42,10 +42,6 @@ def coplanar_groups(scene) -> np.ndarray:
     return connected_components(g, directed=False)[1]
 
 
-GROUP = None
-_orig_nonzero = np.nonzero
-
-
 def main() -> None:
     import inspect
     src = inspect.getsource(B.cast_adaptive)
