@@ -1143,10 +1143,22 @@ def test_predictor_segments_a_scan_from_python_and_takes_a_registered_step(tmp_p
         expect = np.where(masks.any(0), masks.argmax(0), -1)
         assert vertex.dtype["instance"] == np.dtype("<i4") and np.array_equal(vertex["instance"], expect)
         assert set(vertex["instance"].tolist()) == {0, 1} and {"red", "green", "blue"} <= set(vertex.dtype.names)
+        # probe's evaluation takes the registered step too (an experiment measures a variant without a copy
+        # of the per-scan loop): ground truth split where the step splits, so every figure is 1
+        from assist3d.learn.segmenter.probe import evaluate_model
+
+        right = s.coord[:, 0] > np.median(s.coord[:, 0])
+        labelled = np.concatenate([s.coord, s.color, np.full((len(right), 1), 5), np.where(right, 1, 2)[:, None]], 1)
+        np.save(tmp_path / "gt.npy", labelled.astype(np.float32))
+        metrics = evaluate_model(tmp_path / "absent.pt", [f"array:{tmp_path / 'gt.npy'}"], tmp_path / "pred", method="halves")
+        assert metrics["AP50"] == pytest.approx(1.0) and metrics["num_gt"] == 2 and metrics["num_pred"] == 2
+        assert (tmp_path / "pred" / "gt.npz").is_file() and metrics["per_scene"]["gt"]["AP50"] == pytest.approx(1.0)
     finally:
         STEPS.remove("halves")
     with pytest.raises(ConfigError, match="did you mean 'hybrid'"):
         Predictor.load(method="hybird")
+    with pytest.raises(ConfigError, match="unknown post-processing step 'halves'"):
+        evaluate_model(tmp_path / "absent.pt", [f"array:{tmp_path / 'gt.npy'}"], tmp_path / "pred", method="halves")
     with pytest.raises(DataError, match="no weights"):
         Predictor.load(tmp_path / "x.pt", method="geometric")
 

@@ -74,7 +74,6 @@ PARENT_ENV = "ASSIST3D_PROBE_PARENT"
 #: names, for the seed processes of ``--jobs``, the scene pack of the training scenes their parent wrote
 PACK_ENV = "ASSIST3D_PROBE_PACK"
 BOOTSTRAP_DRAWS = 1000
-METHODS: tuple[str, ...] = ("learned", "hybrid", "geometric")
 
 
 def hybrid_settings() -> dict:
@@ -251,10 +250,9 @@ def evaluate_model(model_path: Path, eval_specs: Sequence[str], pred_dir: Path, 
                    on_scene: Callable[[int, int], None] | None = None) -> dict:
     """Segment every scene of ``eval_specs`` with the :class:`.predictor.Predictor` of ``method`` (a
     post-processing step of ``STEPS``: ``learned``, the network's instances; ``hybrid``,
-    :func:`hybrid.segment_hybrid`; ``geometric``, the non-learned reference, which ignores ``model_path``),
-    write predictions, return metrics with per-scene figures."""
-    if method not in METHODS:
-        raise ValueError(f"method {method!r}: expected one of {', '.join(METHODS)}")
+    :func:`hybrid.segment_hybrid`; ``geometric``, the non-learned reference, which ignores ``model_path``; or
+    any step registered with ``STEPS.add``), write predictions, return metrics with per-scene figures. An
+    unknown ``method`` raises ``ConfigError`` naming the closest registered one."""
     predictor = Predictor(load_segmenter(model_path) if STEPS.get(method).needs_model else None, method)
     datasets = [open_dataset(s) for s in eval_specs]
     total = sum(len(d) for d in datasets)
