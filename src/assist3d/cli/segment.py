@@ -214,7 +214,8 @@ def segment_cmd(
                                "fallback proposals below them, snapped to superpoints) or "
                                "geometric (planes removed, connected components; no model)"),
     tta: bool = typer.Option(False, "--tta", help="average the network over 8 turned and mirrored copies of the scan "
-                             "(8x the network's time; measured in experiments/fidelity-log.md, off by default)"),
+                             "(8x the network's time; off by default: it helped hybrid inference on 821-step models and lowered the "
+                             "network alone on the shipped model, docs/results.md)"),
     png: bool = typer.Option(False, "--png", help="also write <scene_id>.png, a top view coloured by instance"),
     as_json: bool = typer.Option(False, "--json", help="print one JSON line per scene (instances, seconds, the files "
                                  "written, AP when GT is known)"),
