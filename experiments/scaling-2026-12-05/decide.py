@@ -4,7 +4,7 @@
 
 1. Shipped model: among the points with two or more seeds, the one with the highest mean learned AP50
    over the 6 rooms replaces the shipped model only if that mean exceeds the shipped model's (measured
-   the same way: the newest of SHIPPED_EVALS, today segmenter-v2.pt's) by more than the point's seed spread
+   the same way: the newest of SHIPPED_EVALS, today segmenter-v3.pt's) by more than the point's seed spread
    (std over seeds).
 2. `segment` default, for the chosen model (the best point if it replaces the shipped model, else the
    shipped model): hybrid stays only if it is above the network alone in at least 5 of the 6 rooms and the
@@ -42,7 +42,7 @@ def hybrid_rule(learned: dict[str, float], hybrid: dict[str, float]) -> tuple[bo
 
 #: scripts/hybrid_eval.py's figures of each model shipped so far, the newest first: the rule measures a point
 #: against the model users get now
-SHIPPED_EVALS = ("hybrid_eval-shipped-v2.json", "hybrid_eval-shipped.json")
+SHIPPED_EVALS = ("hybrid_eval-shipped-v3.json", "hybrid_eval-shipped-v2.json", "hybrid_eval-shipped.json")
 
 
 def main() -> None:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ...core.errors import DataError
 
-SHIPPED_NAME = "segmenter-v2.pt"
+SHIPPED_NAME = "segmenter-v3.pt"
 
 
 def shipped_model_path() -> Path:
