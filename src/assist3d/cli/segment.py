@@ -215,7 +215,7 @@ def segment_cmd(
                                "geometric (planes removed, connected components; no model)"),
     tta: bool = typer.Option(False, "--tta", help="average the network over 8 turned and mirrored copies of the scan "
                              "(8x the network's time; off by default: it helped hybrid inference on 821-step models and lowered the "
-                             "network alone on the shipped model, docs/results.md)"),
+                             "network alone on the 2,000-step model v2, docs/results.md)"),
     png: bool = typer.Option(False, "--png", help="also write <scene_id>.png, a top view coloured by instance"),
     as_json: bool = typer.Option(False, "--json", help="print one JSON line per scene (instances, seconds, the files "
                                  "written, AP when GT is known)"),
