@@ -12,13 +12,13 @@ from pathlib import Path
 
 import numpy as np
 
+from assist3d.core.taxonomy.scannet import SCANNET20_NAMES
 from assist3d.learn.segmenter.checkpoint import load_segmenter
 from assist3d.learn.segmenter.predictor import Predictor
 from assist3d.learn.segmenter.shipped import shipped_model_path
 
-CLASSES = {3: "cabinet", 4: "bed", 5: "chair", 6: "sofa", 7: "table", 8: "door", 9: "window", 10: "bookshelf",
-           11: "picture", 12: "counter", 13: "desk", 14: "curtain", 15: "refrigerator", 16: "shower curtain",
-           17: "toilet", 18: "sink", 19: "bathtub", 20: "otherfurniture"}
+#: the scans' class column is the ScanNet-20 index + 1; the objects are the classes after wall and floor
+CLASSES = {i + 1: name for i, name in enumerate(SCANNET20_NAMES) if name not in ("wall", "floor")}
 SCANS = sorted(Path("../shared/data/real/dev").glob("*.npy")) + [Path("../shared/data/real/scannet_scene0451_01.npy")]
 
 
